@@ -1,0 +1,113 @@
+//! The pinhole perspective camera: (pixel, jitter) → primary ray.
+//!
+//! Owns: the camera model shared by every loader (RON look-at, glTF node matrix). The image
+//! plane follows glTF: the camera looks down its local −Z with +Y up, `yfov` is the vertical
+//! field of view, and the horizontal extent follows the output aspect ratio (so `yfov` is kept
+//! when the ratio changes, as conventions.md asks). Pixel (0,0) is the top-left corner; the
+//! pixel filter is a 1-pixel box, as in the Cycles references.
+
+use crate::geometry::Ray;
+use crate::math::{Mat4, UVec2, Vec2, Vec3A};
+
+/// A pinhole camera.
+#[derive(Clone, Copy, Debug)]
+pub struct Camera {
+    origin: Vec3A,
+    right: Vec3A,
+    up: Vec3A,
+    forward: Vec3A,
+    tan_half_fov_y: f32,
+    resolution: UVec2,
+}
+
+impl Camera {
+    /// A camera at `eye` looking at `target`, `up` giving the vertical, vertical field of view
+    /// `yfov` in radians. `None` when the view is degenerate (eye at target, up parallel to
+    /// the view direction) or the field of view is outside (0, π).
+    pub fn look_at(eye: Vec3A, target: Vec3A, up: Vec3A, yfov: f32, resolution: UVec2) -> Option<Self> {
+        let forward = (target - eye).try_normalize()?;
+        let right = forward.cross(up).try_normalize()?;
+        let up = right.cross(forward);
+        Self::new(eye, right, up, forward, yfov, resolution)
+    }
+
+    /// A camera placed by a node's world matrix (glTF: looks down local −Z, +Y up).
+    pub fn from_matrix(world: &Mat4, yfov: f32, resolution: UVec2) -> Option<Self> {
+        let origin = Vec3A::from(world.w_axis.truncate());
+        let forward = (-Vec3A::from(world.z_axis.truncate())).try_normalize()?;
+        let up_hint = Vec3A::from(world.y_axis.truncate());
+        let right = forward.cross(up_hint).try_normalize()?;
+        let up = right.cross(forward);
+        Self::new(origin, right, up, forward, yfov, resolution)
+    }
+
+    fn new(origin: Vec3A, right: Vec3A, up: Vec3A, forward: Vec3A, yfov: f32, resolution: UVec2) -> Option<Self> {
+        let ok =
+            yfov > 0.0 && yfov < std::f32::consts::PI && resolution.x > 0 && resolution.y > 0 && origin.is_finite();
+        ok.then_some(Self { origin, right, up, forward, tan_half_fov_y: (0.5 * yfov).tan(), resolution })
+    }
+
+    /// The same camera rendering at another resolution (vertical field of view kept).
+    pub fn with_resolution(mut self, resolution: UVec2) -> Self {
+        self.resolution = resolution;
+        self
+    }
+
+    /// Image size in pixels.
+    pub fn resolution(&self) -> UVec2 {
+        self.resolution
+    }
+
+    /// Position of the pinhole.
+    pub fn origin(&self) -> Vec3A {
+        self.origin
+    }
+
+    /// Unit viewing direction.
+    pub fn forward(&self) -> Vec3A {
+        self.forward
+    }
+
+    /// The primary ray through `pixel` at sub-pixel offset `jitter ∈ [0,1)²` (unit direction).
+    #[inline]
+    pub fn ray(&self, pixel: UVec2, jitter: Vec2) -> Ray {
+        let res = self.resolution.as_vec2();
+        let ndc = (pixel.as_vec2() + jitter) / res; // [0,1)², y down
+        let aspect = res.x / res.y;
+        let sx = (2.0 * ndc.x - 1.0) * self.tan_half_fov_y * aspect;
+        let sy = (1.0 - 2.0 * ndc.y) * self.tan_half_fov_y;
+        let dir = (self.forward + self.right * sx + self.up * sy).normalize();
+        Ray::new(self.origin, dir)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn centre_and_corners() {
+        let res = UVec2::new(40, 30);
+        let cam = Camera::look_at(Vec3A::new(0.0, 1.0, 4.0), Vec3A::new(0.0, 1.0, 0.0), Vec3A::Y, 0.6, res).unwrap();
+        let c = cam.ray(UVec2::new(20, 15), Vec2::ZERO);
+        assert!((c.dir - Vec3A::NEG_Z).length() < 1e-6);
+        // Top edge of the image is yfov/2 above the axis.
+        let top = cam.ray(UVec2::new(20, 0), Vec2::ZERO);
+        assert!((top.dir.y.atan2(-top.dir.z) - 0.3).abs() < 1e-5);
+        // Pixel (0,0) is top-left.
+        let tl = cam.ray(UVec2::ZERO, Vec2::ZERO);
+        assert!(tl.dir.x < 0.0 && tl.dir.y > 0.0);
+        assert!(Camera::look_at(Vec3A::ZERO, Vec3A::ZERO, Vec3A::Y, 0.6, res).is_none());
+        assert!(Camera::look_at(Vec3A::ZERO, Vec3A::Y, Vec3A::Y, 0.6, res).is_none());
+    }
+
+    #[test]
+    fn matrix_camera_matches_look_at() {
+        let res = UVec2::new(8, 6);
+        let m = Mat4::from_translation(glam::Vec3::new(0.0, 1.0, 4.4));
+        let a = Camera::from_matrix(&m, 0.6, res).unwrap();
+        let b = Camera::look_at(Vec3A::new(0.0, 1.0, 4.4), Vec3A::new(0.0, 1.0, 0.0), Vec3A::Y, 0.6, res).unwrap();
+        let (ra, rb) = (a.ray(UVec2::new(1, 2), Vec2::splat(0.3)), b.ray(UVec2::new(1, 2), Vec2::splat(0.3)));
+        assert!((ra.dir - rb.dir).length() < 1e-6);
+    }
+}

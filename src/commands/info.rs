@@ -1,0 +1,63 @@
+//! `myriad info`: what a scene holds once loaded and built.
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::Path;
+
+use super::{LoadedScene, human_bytes, human_duration, load_scene};
+use crate::error::Result;
+use crate::scene::BuildOptions;
+
+/// Everything `info` reports.
+pub struct InfoReport {
+    /// The loaded scene and timings.
+    pub loaded: LoadedScene,
+}
+
+/// Loads and builds the scene and gathers its statistics.
+pub fn info(path: Option<&Path>, options: &BuildOptions) -> Result<InfoReport> {
+    Ok(InfoReport { loaded: load_scene(path, options)? })
+}
+
+impl fmt::Display for InfoReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let s = &self.loaded.scene;
+        let st = &s.stats;
+        let res = s.camera.resolution();
+        writeln!(f, "scene        {}", s.source)?;
+        writeln!(f, "camera       '{}', {} × {} px", s.camera_name, res.x, res.y)?;
+        writeln!(f, "bounds       centre {:.3}, radius {:.3} m", s.center, s.radius)?;
+        writeln!(
+            f,
+            "triangles    {} ({} emissive) in {} instances",
+            st.triangles, st.emissive_triangles, st.instances
+        )?;
+        writeln!(f, "materials    {}", s.materials.len())?;
+        let mut kinds: BTreeMap<&str, usize> = BTreeMap::new();
+        for l in &s.lights {
+            *kinds.entry(l.kind_name()).or_default() += 1;
+        }
+        let kinds: Vec<String> = kinds.iter().map(|(k, n)| format!("{n} {k}")).collect();
+        writeln!(
+            f,
+            "lights       {} ({})",
+            s.lights.len(),
+            if kinds.is_empty() { "none".into() } else { kinds.join(", ") }
+        )?;
+        writeln!(f, "total power  {:.4} W (luminance)", s.total_power())?;
+        writeln!(f, "load         {}", human_duration(self.loaded.load_time))?;
+        writeln!(f, "build        {} (BVH {})", human_duration(st.build_time), human_duration(st.bvh_build_time))?;
+        let per_tri = st.geometry_bytes as f64 / st.triangles.max(1) as f64;
+        let per_light = st.light_bytes as f64 / s.lights.len().max(1) as f64;
+        writeln!(
+            f,
+            "memory       geometry + BVH {} ({per_tri:.0} B/triangle), lights {} ({per_light:.0} B/light)",
+            human_bytes(st.geometry_bytes),
+            human_bytes(st.light_bytes)
+        )?;
+        for w in &s.warnings {
+            writeln!(f, "warning      {w}")?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,221 @@
+//! `myriad render`: scene file → EXR (+ PNG preview) with a summary.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+use super::{
+    DEFAULT_MAX_DEPTH, DEFAULT_SCENE_NAME, DEFAULT_SPP, LoadedScene, human_bytes, human_duration, human_rate,
+    load_scene,
+};
+use crate::error::{Error, Result};
+use crate::film::AovSet;
+use crate::light_sampler::{LightSamplerKind, LightStrategy};
+use crate::math::UVec2;
+use crate::render::{Budget, RenderOutput, RenderSettings, render as render_scene};
+use crate::scene::BuildOptions;
+
+/// The light sampler used when neither the command line nor the scene names one.
+pub const DEFAULT_SAMPLER: LightSamplerKind = LightSamplerKind::Power;
+
+/// Everything `render` can be told; `None` fields fall back to the scene, then to defaults.
+#[derive(Clone, Debug, Default)]
+pub struct RenderOptions {
+    /// Scene file; `None` renders the built-in Cornell box.
+    pub scene: Option<PathBuf>,
+    /// EXR output path.
+    pub output: PathBuf,
+    /// PNG preview path; `None` puts it beside the EXR.
+    pub png: Option<PathBuf>,
+    /// Write no PNG preview.
+    pub no_png: bool,
+    /// Samples per pixel.
+    pub spp: Option<u32>,
+    /// Render for this long instead of a fixed spp.
+    pub time: Option<Duration>,
+    /// Light sampler.
+    pub sampler: Option<LightSamplerKind>,
+    /// Random seed.
+    pub seed: Option<u64>,
+    /// Output size.
+    pub resolution: Option<UVec2>,
+    /// Maximum scattering events.
+    pub max_depth: Option<u32>,
+    /// Direct lighting only (max depth 1).
+    pub direct_only: bool,
+    /// Camera name.
+    pub camera: Option<String>,
+    /// Extra EXR channels.
+    pub aovs: AovSet,
+    /// PNG exposure in stops.
+    pub exposure: f32,
+    /// Draw a progress bar (only shown on a terminal).
+    pub progress: bool,
+}
+
+/// What a render did, for the summary.
+pub struct RenderReport {
+    /// The scene and its load timings.
+    pub loaded: LoadedScene,
+    /// The sampler used.
+    pub sampler: LightSamplerKind,
+    /// Its build time.
+    pub sampler_build_time: Duration,
+    /// Its memory.
+    pub sampler_bytes: usize,
+    /// The settings rendered with.
+    pub settings: RenderSettings,
+    /// Film and statistics.
+    pub output: RenderOutput,
+    /// Files written.
+    pub written: Vec<PathBuf>,
+}
+
+/// Settings after applying command line, then scene file, then defaults.
+fn resolve(opts: &RenderOptions, loaded: &LoadedScene) -> Result<(RenderSettings, LightSamplerKind)> {
+    let r = &loaded.scene.render;
+    let budget = match (opts.time, opts.spp.or(r.spp)) {
+        (Some(t), _) => Budget::Time(t),
+        (None, Some(0)) => return Err(Error::Usage("--spp must be at least 1".into())),
+        (None, spp) => Budget::Spp(spp.unwrap_or(DEFAULT_SPP)),
+    };
+    let max_depth = if opts.direct_only { 1 } else { opts.max_depth.or(r.max_depth).unwrap_or(DEFAULT_MAX_DEPTH) };
+    let settings = RenderSettings { budget, seed: opts.seed.or(r.seed).unwrap_or(0), max_depth, aovs: opts.aovs };
+    Ok((settings, opts.sampler.or(r.sampler).unwrap_or(DEFAULT_SAMPLER)))
+}
+
+/// A progress bar on stderr when asked for and stderr is a terminal; hidden otherwise.
+pub fn progress_bar(show: bool, label: &str) -> ProgressBar {
+    let pb = ProgressBar::with_draw_target(
+        None,
+        if show { ProgressDrawTarget::stderr() } else { ProgressDrawTarget::hidden() },
+    );
+    pb.set_style(
+        ProgressStyle::with_template("{prefix:>8} [{bar:40}] {percent:>3}%  {elapsed} elapsed, ~{eta} left")
+            .unwrap()
+            .progress_chars("=> "),
+    );
+    pb.set_prefix(label.to_string());
+    pb
+}
+
+/// Header attributes recording how an image was made.
+pub fn provenance(
+    scene: &str,
+    sampler: LightSamplerKind,
+    settings: &RenderSettings,
+    stats: &crate::render::RenderStats,
+) -> Vec<(String, String)> {
+    [
+        ("myriad.version", env!("CARGO_PKG_VERSION").to_string()),
+        ("myriad.git_revision", env!("MYRIAD_GIT_REVISION").to_string()),
+        ("myriad.scene", scene.to_string()),
+        ("myriad.sampler", sampler.name().to_string()),
+        ("myriad.spp", stats.spp.to_string()),
+        ("myriad.seed", settings.seed.to_string()),
+        ("myriad.max_depth", settings.max_depth.to_string()),
+        ("myriad.render_seconds", format!("{:.6}", stats.elapsed.as_secs_f64())),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect()
+}
+
+/// Loads, renders and writes the outputs. Output paths are checked before rendering, so a
+/// bad path fails in milliseconds, not after the render.
+pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
+    let png = (!opts.no_png).then(|| opts.png.clone().unwrap_or_else(|| super::preview_path(&opts.output)));
+    crate::io::check_writable(&opts.output)?;
+    if let Some(p) = &png {
+        crate::io::check_writable(p)?;
+    }
+    let loaded =
+        load_scene(opts.scene.as_deref(), &BuildOptions { resolution: opts.resolution, camera: opts.camera.clone() })?;
+    let (settings, sampler) = resolve(opts, &loaded)?;
+    let scene = &loaded.scene;
+
+    let t = Instant::now();
+    let strategy = LightStrategy::build(sampler, &scene.lights, scene.radius);
+    let sampler_build_time = t.elapsed();
+
+    let pb = progress_bar(opts.progress, sampler.name());
+    let output = render_scene(scene, &strategy, &settings, Some(&pb), &mut |_, _| {});
+    pb.finish_and_clear();
+
+    let scene_name = opts.scene.as_deref().map_or(DEFAULT_SCENE_NAME.to_string(), |p| p.display().to_string());
+    let meta = provenance(&scene_name, sampler, &settings, &output.stats);
+    let mut written = Vec::new();
+    crate::io::exr::write(&opts.output, &output.film.layers(settings.aovs), &meta)?;
+    written.push(opts.output.clone());
+    if let Some(p) = png {
+        crate::io::png::write(&p, output.film.size(), &output.film.means(), opts.exposure)?;
+        written.push(p);
+    }
+    Ok(RenderReport {
+        loaded,
+        sampler,
+        sampler_build_time,
+        sampler_bytes: strategy.memory_bytes(),
+        settings,
+        output,
+        written,
+    })
+}
+
+/// Renders a path list for the summary.
+fn paths(ps: &[PathBuf]) -> String {
+    ps.iter().map(|p: &PathBuf| Path::display(p).to_string()).collect::<Vec<_>>().join(", ")
+}
+
+impl fmt::Display for RenderReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let s = &self.loaded.scene;
+        let st = &self.output.stats;
+        let res = self.output.film.size();
+        writeln!(
+            f,
+            "scene      {} ({} triangles, {} lights, {} × {} px)",
+            s.source,
+            s.stats.triangles,
+            s.lights.len(),
+            res.x,
+            res.y
+        )?;
+        writeln!(
+            f,
+            "prepare    load {}, build {} (BVH {}), {} sampler {} ({})",
+            human_duration(self.loaded.load_time),
+            human_duration(s.stats.build_time),
+            human_duration(s.stats.bvh_build_time),
+            self.sampler,
+            human_duration(self.sampler_build_time),
+            human_bytes(self.sampler_bytes)
+        )?;
+        writeln!(
+            f,
+            "render     {} spp in {} with {} threads, max depth {}, seed {}",
+            st.spp,
+            human_duration(st.elapsed),
+            rayon::current_num_threads(),
+            self.settings.max_depth,
+            self.settings.seed
+        )?;
+        writeln!(
+            f,
+            "speed      {}samples/s, {}rays/s ({} camera+bounce, {} shadow)",
+            human_rate(st.samples_per_second()),
+            human_rate(st.rays_per_second()),
+            st.rays.rays,
+            st.rays.shadow_rays
+        )?;
+        if st.non_finite_samples > 0 {
+            writeln!(f, "warning    {} samples were not finite and counted as black", st.non_finite_samples)?;
+        }
+        for w in &s.warnings {
+            writeln!(f, "warning    {w}")?;
+        }
+        write!(f, "wrote      {}", paths(&self.written))
+    }
+}

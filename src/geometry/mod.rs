@@ -1,0 +1,41 @@
+//! Surfaces as triangles: storage, ray queries and robust ray spawning.
+//!
+//! Owns: [`Ray`], the flattened world-space triangle soup with its shading attributes
+//! ([`Geometry`]), the obvhs acceleration structure (in `accel.rs`, the only file that imports
+//! obvhs) and [`SurfaceHit`]. Depends on `math` only; knows nothing of materials or lights
+//! beyond the ids it stores per triangle.
+
+mod accel;
+mod hit;
+mod mesh;
+mod offset;
+
+pub use accel::{Accel, AccelStats};
+pub use hit::SurfaceHit;
+pub use mesh::{Geometry, GeometryBuilder, NO_LIGHT, TriangleInfo};
+pub use offset::offset_ray_origin;
+
+use crate::math::Vec3A;
+
+/// A ray: origin and direction (not necessarily normalised).
+#[derive(Clone, Copy, Debug)]
+pub struct Ray {
+    /// Origin.
+    pub origin: Vec3A,
+    /// Direction.
+    pub dir: Vec3A,
+}
+
+impl Ray {
+    /// A ray from `origin` along `dir`.
+    #[inline]
+    pub fn new(origin: Vec3A, dir: Vec3A) -> Self {
+        Self { origin, dir }
+    }
+
+    /// The point at parameter `t`.
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3A {
+        self.origin + self.dir * t
+    }
+}

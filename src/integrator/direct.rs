@@ -1,0 +1,96 @@
+//! Next-event estimation: light arriving directly at a shading point from the light sources.
+//!
+//! With a one-light sampler, one light is drawn with the single number `Dim::LightSelect`
+//! and one point on it with `Dim::LightPoint`; the contribution is divided by the product
+//! pmf × pdf and MIS-weighted (power heuristic) against the BSDF's density for the same
+//! direction. With `all`, every light gets its own point (`Dim::LightPoint`, sub-index = light)
+//! and selection pmf 1. Delta lights get weight 1: BSDF sampling cannot find them.
+
+use super::RayCounters;
+use crate::geometry::{Ray, offset_ray_origin};
+use crate::light::{Light, LightId};
+use crate::light_sampler::{LightSampler, LightStrategy, ShadingContext};
+use crate::material::ShadingPoint;
+use crate::math::{Rgb, Vec2, Vec3A, power_heuristic};
+use crate::sampling::{Dim, SampleStream};
+use crate::scene::Scene;
+
+/// Probability that NEE at `ctx` picks `light` (1 for `all`).
+#[inline]
+pub fn selection_pmf(strategy: &LightStrategy, ctx: &ShadingContext, light: LightId) -> f32 {
+    match strategy {
+        LightStrategy::All => 1.0,
+        LightStrategy::One(s) => s.pmf(ctx, light),
+    }
+}
+
+/// The contribution of one chosen light, divided by its selection probability `pmf`.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+fn light_contribution(
+    scene: &Scene,
+    light: &Light,
+    pmf: f32,
+    sp: &ShadingPoint,
+    p: Vec3A,
+    wo: Vec3A,
+    u: Vec2,
+    counters: &mut RayCounters,
+) -> Rgb {
+    let Some(ls) = light.sample_li(p, u) else { return Rgb::ZERO };
+    let f = sp.eval_cos(wo, ls.wi);
+    if f == Rgb::ZERO || !(ls.pdf > 0.0) {
+        return Rgb::ZERO;
+    }
+    let origin = offset_ray_origin(p, sp.ng);
+    counters.shadow_rays += 1;
+    let occluded = if ls.distance.is_infinite() {
+        scene.occluded(&Ray::new(origin, ls.wi), f32::INFINITY)
+    } else {
+        let target = if ls.n == Vec3A::ZERO { ls.p } else { offset_ray_origin(ls.p, ls.n) };
+        scene.occluded(&Ray::new(origin, target - origin), 1.0)
+    };
+    if occluded {
+        return Rgb::ZERO;
+    }
+    let weight = if light.is_delta() { 1.0 } else { power_heuristic(pmf * ls.pdf, sp.pdf(wo, ls.wi)) };
+    f * ls.radiance * (weight / (pmf * ls.pdf))
+}
+
+/// Direct light reflected towards `wo` at surface point `p`, estimated with `strategy`.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub fn estimate_direct(
+    scene: &Scene,
+    strategy: &LightStrategy,
+    sp: &ShadingPoint,
+    p: Vec3A,
+    wo: Vec3A,
+    stream: &SampleStream,
+    bounce: u32,
+    counters: &mut RayCounters,
+) -> Rgb {
+    match strategy {
+        LightStrategy::All => scene
+            .lights
+            .iter()
+            .enumerate()
+            .map(|(i, light)| {
+                let u = stream.get_2d(bounce, Dim::LightPoint, i as u32);
+                light_contribution(scene, light, 1.0, sp, p, wo, u, counters)
+            })
+            .fold(Rgb::ZERO, |a, b| a + b),
+        LightStrategy::One(sampler) => {
+            let u_select = stream.get_1d(bounce, Dim::LightSelect, 0);
+            let u_point = stream.get_2d(bounce, Dim::LightPoint, 0);
+            let ctx = ShadingContext { p, n: sp.frame.n };
+            match sampler.sample(&ctx, u_select) {
+                Some(s) => {
+                    debug_assert!(s.pmf > 0.0);
+                    light_contribution(scene, &scene.lights[s.light.0 as usize], s.pmf, sp, p, wo, u_point, counters)
+                }
+                None => Rgb::ZERO,
+            }
+        }
+    }
+}

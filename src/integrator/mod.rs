@@ -1,0 +1,30 @@
+//! Light transport: unidirectional path tracing with next-event estimation and MIS.
+//!
+//! Owns: the per-path estimator ([`path::radiance`]), next-event estimation for one shading
+//! point ([`direct::estimate_direct`]), and the counters both keep. Depends on scene, material,
+//! light, light_sampler and sampling; knows nothing of pixels or threads.
+
+pub mod direct;
+pub mod path;
+
+/// Rays traced by one worker, summed at the end of a render (no atomics on the hot path).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayCounters {
+    /// Closest-hit rays (camera and bounce rays).
+    pub rays: u64,
+    /// Occlusion (shadow) rays.
+    pub shadow_rays: u64,
+}
+
+impl RayCounters {
+    /// Adds another worker's counts.
+    pub fn add(&mut self, other: &RayCounters) {
+        self.rays += other.rays;
+        self.shadow_rays += other.shadow_rays;
+    }
+
+    /// All rays.
+    pub fn total(&self) -> u64 {
+        self.rays + self.shadow_rays
+    }
+}

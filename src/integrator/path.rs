@@ -1,0 +1,100 @@
+//! The path tracer: camera ray → bounces with NEE and MIS → radiance.
+//!
+//! pbrt-v4's `PathIntegrator` structure. At every vertex: add emission (MIS-weighted against
+//! NEE when the vertex was found by BSDF sampling), stop at `max_depth` scattering events
+//! (1 = direct lighting only), estimate direct light, sample the BSDF, apply Russian roulette
+//! from the third vertex on. Every random number is addressed by (bounce, `Dim`), so the
+//! choices of one decision never shift another's numbers.
+
+use super::RayCounters;
+use super::direct::{estimate_direct, selection_pmf};
+use crate::film::FirstHit;
+use crate::geometry::{Ray, offset_ray_origin};
+use crate::light::LightId;
+use crate::light_sampler::{LightStrategy, ShadingContext};
+use crate::material::ShadingPoint;
+use crate::math::{Rgb, power_heuristic};
+use crate::sampling::{Dim, SampleStream};
+use crate::scene::Scene;
+
+/// Russian roulette starts at this depth (after two scattering events), as in pbrt-v4.
+const RR_MIN_DEPTH: u32 = 2;
+
+/// What one camera path found.
+#[derive(Clone, Copy, Debug)]
+pub struct PathSample {
+    /// Radiance arriving along the camera ray.
+    pub radiance: Rgb,
+    /// The first surface hit, for AOVs.
+    pub first_hit: Option<FirstHit>,
+}
+
+/// Radiance arriving along `ray` (a camera ray), with at most `max_depth` scattering events.
+pub fn radiance(
+    scene: &Scene,
+    strategy: &LightStrategy,
+    mut ray: Ray,
+    stream: &SampleStream,
+    max_depth: u32,
+    counters: &mut RayCounters,
+) -> PathSample {
+    let mut l = Rgb::ZERO;
+    let mut first_hit = None;
+    let mut beta = Rgb::ONE;
+    // The previous vertex, for MIS at emitter hits: its light-sampling context and the
+    // density with which its BSDF chose `ray`.
+    let mut prev: Option<(ShadingContext, f32)> = None;
+    let mut depth = 0u32;
+    loop {
+        counters.rays += 1;
+        let Some(hit) = scene.intersect(&ray, f32::INFINITY) else { break };
+        let wo = -ray.dir.normalize();
+        if depth == 0 {
+            let n = if hit.n_shading.dot(wo) < 0.0 { -hit.n_shading } else { hit.n_shading };
+            first_hit =
+                Some(FirstHit { albedo: scene.materials[hit.material as usize].base_color, normal: n, depth: hit.t });
+        }
+
+        if let Some(id) = hit.light {
+            let light = &scene.lights[id as usize];
+            let le = light.emitted(hit.n_geom, ray.dir);
+            if le != Rgb::ZERO {
+                let weight = match prev {
+                    None => 1.0,
+                    Some((ctx, bsdf_pdf)) => {
+                        let pmf = selection_pmf(strategy, &ctx, LightId(id));
+                        power_heuristic(bsdf_pdf, pmf * light.pdf_li(ctx.p, hit.p, hit.n_geom))
+                    }
+                };
+                l += beta * le * weight;
+            }
+        }
+        if depth == max_depth {
+            break;
+        }
+        let Some(bsdf) = scene.materials[hit.material as usize].bsdf() else { break };
+        let sp = ShadingPoint::new(bsdf, hit.n_geom, hit.n_shading, wo);
+
+        if !scene.lights.is_empty() {
+            l += beta * estimate_direct(scene, strategy, &sp, hit.p, wo, stream, depth, counters);
+        }
+
+        let u_lobe = stream.get_1d(depth, Dim::BsdfLobe, 0);
+        let u_dir = stream.get_2d(depth, Dim::BsdfDirection, 0);
+        let Some(bs) = sp.sample(wo, u_lobe, u_dir) else { break };
+        beta *= bs.weight;
+        prev = Some((ShadingContext { p: hit.p, n: sp.frame.n }, bs.pdf));
+        ray = Ray::new(offset_ray_origin(hit.p, sp.ng), bs.wi);
+        depth += 1;
+
+        if depth >= RR_MIN_DEPTH {
+            let survive = beta.max_element().min(1.0);
+            if stream.get_1d(depth, Dim::RussianRoulette, 0) >= survive {
+                break;
+            }
+            beta /= survive;
+        }
+    }
+    debug_assert!(l.is_finite(), "non-finite radiance {l}");
+    PathSample { radiance: l, first_hit }
+}

@@ -1,0 +1,94 @@
+//! Everything that touches files: scene loaders, image writers and readers.
+//!
+//! Owns: choosing a loader by extension ([`load_scene`]), the RON, OBJ and glTF loaders, EXR
+//! and PNG output, and [`write_atomically`], which every output goes through so that a crash,
+//! a full disk or Ctrl-C never leaves a truncated file (write a temporary file beside the
+//! target, then rename it over).
+
+pub mod exr;
+pub mod obj;
+pub mod png;
+pub mod ron;
+
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, Result};
+use crate::scene::SceneDescription;
+
+/// Loads a scene file, choosing the loader by extension (`.ron`, `.obj`).
+pub fn load_scene(path: &Path) -> Result<SceneDescription> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
+    match ext.as_str() {
+        "ron" => ron::load(path),
+        "obj" => obj::load_scene(path),
+        _ => Err(Error::scene(
+            path.display().to_string(),
+            "file name",
+            format!("unknown scene format '.{ext}'; myriad reads .ron and .obj scenes"),
+        )),
+    }
+}
+
+/// The temporary path an output is written to before being renamed to `path`.
+fn temp_path(path: &Path) -> PathBuf {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    path.with_file_name(format!(".{name}.myriad-tmp-{}", std::process::id()))
+}
+
+/// Checks, before a long render, that `path` can be written: its folder exists and accepts a
+/// new file. Nothing is left behind.
+pub fn check_writable(path: &Path) -> Result<()> {
+    if path.is_dir() {
+        return Err(Error::Output { path: path.into(), message: "is a directory; give a file name".into() });
+    }
+    let tmp = temp_path(path);
+    std::fs::File::create(&tmp)
+        .map_err(|e| Error::Output { path: path.into(), message: format!("cannot be written: {e}") })?;
+    let _ = std::fs::remove_file(&tmp);
+    Ok(())
+}
+
+/// Writes `path` whole or not at all: `write` fills a temporary file beside it, which then
+/// replaces `path` by a rename. On any error the temporary file is removed and `path` is left
+/// as it was.
+pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let tmp = temp_path(path);
+    let result = write(&tmp).and_then(|()| {
+        std::fs::rename(&tmp, path)
+            .map_err(|e| Error::Output { path: path.into(), message: format!("cannot be replaced: {e}") })
+    });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn failed_write_leaves_the_old_file_and_no_temp() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("out.txt");
+        std::fs::write(&target, "old").unwrap();
+        let err = write_atomically(&target, |tmp| {
+            std::fs::write(tmp, "half").unwrap();
+            Err(Error::Usage("boom".into()))
+        });
+        assert!(err.is_err());
+        assert_eq!(std::fs::read_to_string(&target).unwrap(), "old");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        write_atomically(&target, |tmp| std::fs::write(tmp, "new").map_err(|e| Error::io(tmp, e))).unwrap();
+        assert_eq!(std::fs::read_to_string(&target).unwrap(), "new");
+    }
+
+    #[test]
+    fn unwritable_targets_are_refused_up_front() {
+        let dir = tempfile::tempdir().unwrap();
+        assert!(check_writable(&dir.path().join("no/such/dir/x.exr")).is_err());
+        assert!(check_writable(dir.path()).is_err());
+        assert!(check_writable(&dir.path().join("x.exr")).is_ok());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+}

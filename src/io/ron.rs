@@ -1,0 +1,209 @@
+//! `.ron` scene files → [`SceneDescription`].
+//!
+//! Parses the format of [`crate::scene::format`] (implicit `Some` on, unknown fields denied),
+//! reports syntax errors as `file: line:col: message` with the offending line and a caret, and
+//! compiles the file into the description: named materials to indices, shapes and light grids
+//! to meshes and lights, `.obj` meshes loaded relative to the scene file.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::sync::Arc;
+
+use ::ron::extensions::Extensions;
+
+use crate::error::{Error, Result};
+use crate::material::Material;
+use crate::math::{Mat4, Rgb, UVec2, Vec3A};
+use crate::scene::description::{
+    CameraDesc, CameraPlacement, InstanceDesc, LightDesc, RenderDefaults, SceneDescription,
+};
+use crate::scene::format::{CameraSpec, LightSpec, MaterialSpec, ObjectSpec, SceneFile, TransformSpec};
+use crate::scene::shapes;
+
+/// Reads and compiles the scene file at `path`.
+pub fn load(path: &Path) -> Result<SceneDescription> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    parse(&text, &path.display().to_string(), base)
+}
+
+/// Compiles scene text; `source` names it in messages, `base_dir` resolves relative paths.
+pub fn parse(text: &str, source: &str, base_dir: &Path) -> Result<SceneDescription> {
+    let file: SceneFile = ::ron::Options::default()
+        .with_default_extension(Extensions::IMPLICIT_SOME | Extensions::UNWRAP_VARIANT_NEWTYPES)
+        .from_str(text)
+        .map_err(|e| {
+            let (line, col) = (e.span.start.line, e.span.start.col);
+            let snippet = text.lines().nth(line.saturating_sub(1)).unwrap_or("");
+            let caret = " ".repeat(col.saturating_sub(1));
+            Error::scene(
+                source,
+                format!("{line}:{col}"),
+                format!("{}\n  {line:>4} | {snippet}\n       | {caret}^", e.code),
+            )
+        })?;
+    compile(file, source, base_dir)
+}
+
+fn v3(a: [f32; 3]) -> Vec3A {
+    Vec3A::from(a)
+}
+
+fn transform(t: &TransformSpec) -> Mat4 {
+    let r = t.rotate_deg.map(f32::to_radians);
+    let rotation =
+        glam::Quat::from_rotation_z(r[2]) * glam::Quat::from_rotation_y(r[1]) * glam::Quat::from_rotation_x(r[0]);
+    Mat4::from_scale_rotation_translation(
+        t.scale.map_or(glam::Vec3::ONE, glam::Vec3::from),
+        rotation,
+        glam::Vec3::from(t.translate),
+    )
+}
+
+fn material(name: &str, spec: &MaterialSpec) -> Material {
+    match *spec {
+        MaterialSpec::Diffuse { albedo } => Material::diffuse(name, v3(albedo)),
+        MaterialSpec::MetalRough { base_color, metallic, roughness, specular } => {
+            Material { metallic, roughness, specular, ..Material::diffuse(name, v3(base_color)) }
+        }
+        MaterialSpec::Emissive { radiance, two_sided, albedo } => {
+            Material { emission: v3(radiance), double_sided: two_sided, ..Material::diffuse(name, v3(albedo)) }
+        }
+    }
+}
+
+fn compile(file: SceneFile, source: &str, base_dir: &Path) -> Result<SceneDescription> {
+    let mut desc = SceneDescription { source: source.to_string(), ..Default::default() };
+    let CameraSpec::Perspective { eye, look_at, up, yfov_deg } = file.camera;
+    desc.cameras.push(CameraDesc {
+        name: "camera".into(),
+        placement: CameraPlacement::LookAt { eye: v3(eye), target: v3(look_at), up: v3(up) },
+        yfov: yfov_deg.to_radians(),
+        aspect_ratio: None,
+    });
+    desc.resolution = file.film.resolution.map(|(w, h)| UVec2::new(w, h));
+    if let Some(UVec2 { x, y }) = desc.resolution
+        && (x == 0 || y == 0 || x > 32768 || y > 32768)
+    {
+        return Err(Error::scene(
+            source,
+            "film.resolution",
+            format!("{x} × {y} is not a usable image size (1 to 32768 per side)"),
+        ));
+    }
+    desc.render = RenderDefaults {
+        spp: file.render.spp,
+        max_depth: file.render.max_depth,
+        sampler: file.render.sampler,
+        seed: file.render.seed,
+    };
+
+    let mut names: BTreeMap<String, u32> = BTreeMap::new();
+    for (name, spec) in &file.materials {
+        names.insert(name.clone(), desc.materials.len() as u32);
+        desc.materials.push(material(name, spec));
+    }
+    let lookup = |what: &str, name: &str| {
+        names.get(name).copied().ok_or_else(|| {
+            let known: Vec<&String> = names.keys().collect();
+            Error::scene(source, what, format!("unknown material '{name}'; the scene defines {known:?}"))
+        })
+    };
+
+    for (i, obj) in file.objects.iter().enumerate() {
+        let place = |desc: &mut SceneDescription, mesh: crate::scene::description::MeshDesc, m: Mat4, name: String| {
+            desc.meshes.push(mesh);
+            desc.instances.push(InstanceDesc { mesh: (desc.meshes.len() - 1) as u32, transform: m, name });
+        };
+        match obj {
+            ObjectSpec::Quad { corner, edge1, edge2, material } => {
+                let what = format!("objects[{i}] Quad");
+                let m = lookup(&what, material)?;
+                place(
+                    &mut desc,
+                    shapes::quad_mesh(&what, v3(*corner), v3(*edge1), v3(*edge2), m),
+                    Mat4::IDENTITY,
+                    what,
+                );
+            }
+            ObjectSpec::Box { size, transform: t, material } => {
+                let what = format!("objects[{i}] Box");
+                let m = lookup(&what, material)?;
+                place(&mut desc, shapes::box_mesh(&what, v3(*size), m), transform(t), what);
+            }
+            ObjectSpec::Sphere { center, radius, subdivisions, material } => {
+                let what = format!("objects[{i}] Sphere");
+                let m = lookup(&what, material)?;
+                if !(*radius > 0.0) || *subdivisions > 8 {
+                    return Err(Error::scene(source, what, "needs radius > 0 and at most 8 subdivisions"));
+                }
+                place(
+                    &mut desc,
+                    shapes::sphere_mesh(&what, v3(*center), *radius, *subdivisions, m),
+                    Mat4::IDENTITY,
+                    what,
+                );
+            }
+            ObjectSpec::Mesh { path, transform: t, material } => {
+                let what = format!("objects[{i}] Mesh");
+                let override_material = material.as_deref().map(|m| lookup(&what, m)).transpose()?;
+                let full = base_dir.join(path);
+                let loaded = super::obj::load_meshes(&full).map_err(|e| match e {
+                    Error::Io { source: io, .. } => {
+                        Error::scene(source, &what, format!("cannot read '{}': {io}", full.display()))
+                    }
+                    other => other,
+                })?;
+                let first_material = desc.materials.len() as u32;
+                desc.materials.extend(loaded.materials);
+                desc.warnings.extend(loaded.warnings);
+                let m = transform(t);
+                for mut mesh in loaded.meshes {
+                    mesh.material = override_material.unwrap_or(first_material + mesh.material);
+                    let name = format!("{what} '{}'", mesh.name);
+                    place(&mut desc, mesh, m, name);
+                }
+            }
+        }
+    }
+
+    for (i, light) in file.lights.iter().enumerate() {
+        let name = |kind: &str| -> Arc<str> { Arc::from(format!("lights[{i}] {kind}")) };
+        match light {
+            LightSpec::Point { position, intensity } => desc.lights.push(LightDesc::Point {
+                name: name("Point"),
+                position: v3(*position),
+                intensity: v3(*intensity),
+            }),
+            LightSpec::Spot { position, direction, intensity, inner_deg, outer_deg } => {
+                desc.lights.push(LightDesc::Spot {
+                    name: name("Spot"),
+                    position: v3(*position),
+                    direction: v3(*direction),
+                    intensity: v3(*intensity),
+                    inner_angle: inner_deg.to_radians(),
+                    outer_angle: outer_deg.to_radians(),
+                })
+            }
+            LightSpec::Directional { direction, irradiance } => desc.lights.push(LightDesc::Directional {
+                name: name("Directional"),
+                direction: v3(*direction),
+                irradiance: v3(*irradiance),
+            }),
+            LightSpec::Quad { corner, edge1, edge2, radiance, two_sided } => desc.lights.push(LightDesc::Quad {
+                name: name("Quad"),
+                corner: v3(*corner),
+                edge1: v3(*edge1),
+                edge2: v3(*edge2),
+                radiance: Rgb::from(*radiance),
+                two_sided: *two_sided,
+            }),
+            LightSpec::Grid(g) => {
+                let label = format!("lights[{i}] Grid");
+                let lamps = shapes::light_grid(&label, g).map_err(|m| Error::scene(source, &label, m))?;
+                desc.lights.extend(lamps);
+            }
+        }
+    }
+    Ok(desc)
+}

@@ -1,0 +1,124 @@
+//! Light sources: what each kind emits, how to sample a point or direction on it, and its
+//! power.
+//!
+//! Owns: the closed set [`Light`] (one struct per kind, one file each) and [`LightSample`].
+//! Units (conventions.md): area lights carry radiance [W/(m²·sr)], point and spot lights
+//! radiant intensity [W/sr], directional lights irradiance [W/m²]. Powers are in watts of
+//! luminance (Rec.709 Y), the scalar the `power` sampler compares. Depends on `math`.
+
+mod area;
+mod distant;
+mod point;
+mod quad;
+mod spot;
+mod triangle;
+
+pub use area::AreaEmission;
+pub use distant::DistantLight;
+pub use point::PointLight;
+pub use quad::QuadLight;
+pub use spot::SpotLight;
+pub use triangle::TriangleLight;
+
+use crate::math::{Rgb, Vec2, Vec3A};
+
+/// Index of a light in the scene's light list.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct LightId(pub u32);
+
+/// A point or direction chosen on a light, seen from a receiving point.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSample {
+    /// Radiance arriving at the receiver along `-wi` (before visibility). For delta lights the
+    /// incident irradiance-like term (I/d² or E) that the estimator divides by pdf = 1.
+    pub radiance: Rgb,
+    /// Unit direction from the receiver towards the light.
+    pub wi: Vec3A,
+    /// Distance to the light point (infinite for directional lights).
+    pub distance: f32,
+    /// Solid-angle density of `wi` (1 for delta lights).
+    pub pdf: f32,
+    /// The point on the light (shadow-ray target; unused for directional lights).
+    pub p: Vec3A,
+    /// Unit surface normal at `p` on the receiver's side (zero for point-like lights).
+    pub n: Vec3A,
+}
+
+/// Every kind of light myriad renders.
+#[derive(Clone, Debug)]
+pub enum Light {
+    /// Isotropic point light.
+    Point(PointLight),
+    /// Spot light with glTF cone falloff.
+    Spot(SpotLight),
+    /// Directional ("sun") light at infinity.
+    Distant(DistantLight),
+    /// Emissive triangle.
+    Triangle(TriangleLight),
+    /// Emissive parallelogram (RON quads and grid cells).
+    Quad(QuadLight),
+}
+
+impl Light {
+    /// Samples the light as seen from `p` with `u ∈ [0,1)²`; `None` when it cannot reach `p`.
+    #[inline]
+    pub fn sample_li(&self, p: Vec3A, u: Vec2) -> Option<LightSample> {
+        match self {
+            Light::Point(l) => l.sample_li(p),
+            Light::Spot(l) => l.sample_li(p),
+            Light::Distant(l) => l.sample_li(),
+            Light::Triangle(l) => l.sample_li(p, u),
+            Light::Quad(l) => l.sample_li(p, u),
+        }
+    }
+
+    /// Solid-angle density with which [`Light::sample_li`] from `p` picks the light point `q`
+    /// with normal `n_q`. Zero for delta lights (they cannot be hit).
+    #[inline]
+    pub fn pdf_li(&self, p: Vec3A, q: Vec3A, n_q: Vec3A) -> f32 {
+        match self {
+            Light::Point(_) | Light::Spot(_) | Light::Distant(_) => 0.0,
+            Light::Triangle(l) => l.emission.pdf_li(p, q, n_q, l.area),
+            Light::Quad(l) => l.emission.pdf_li(p, q, n_q, l.area),
+        }
+    }
+
+    /// Radiance leaving the surface at a ray hit, along `-dir` (`dir`: the ray's direction;
+    /// `n_geom`: the hit triangle's counter-clockwise normal).
+    #[inline]
+    pub fn emitted(&self, n_geom: Vec3A, dir: Vec3A) -> Rgb {
+        match self {
+            Light::Point(_) | Light::Spot(_) | Light::Distant(_) => Rgb::ZERO,
+            Light::Triangle(l) => l.emission.radiance_towards(n_geom, -dir),
+            Light::Quad(l) => l.emission.radiance_towards(n_geom, -dir),
+        }
+    }
+
+    /// Emitted power in watts (luminance); `scene_radius` sizes directional lights.
+    pub fn power(&self, scene_radius: f32) -> f32 {
+        match self {
+            Light::Point(l) => l.power(),
+            Light::Spot(l) => l.power(),
+            Light::Distant(l) => l.power(scene_radius),
+            Light::Triangle(l) => l.emission.power(l.area),
+            Light::Quad(l) => l.emission.power(l.area),
+        }
+    }
+
+    /// True for lights no ray can hit (point, spot, directional).
+    #[inline]
+    pub fn is_delta(&self) -> bool {
+        matches!(self, Light::Point(_) | Light::Spot(_) | Light::Distant(_))
+    }
+
+    /// Short name of the kind, for reports.
+    pub fn kind_name(&self) -> &'static str {
+        match self {
+            Light::Point(_) => "point",
+            Light::Spot(_) => "spot",
+            Light::Distant(_) => "directional",
+            Light::Triangle(_) => "triangle",
+            Light::Quad(_) => "quad",
+        }
+    }
+}

@@ -1,0 +1,149 @@
+//! Choosing one light per shading point: the contract, the samplers and the CLI's switch.
+//!
+//! Owns: [`ShadingContext`], [`SampledLight`], the [`LightSampler`] trait (what tests and
+//! benches are generic over), [`AnyLightSampler`] (the runtime choice, one `match` per call,
+//! no `dyn` on the hot path) and [`LightStrategy`], which adds the `all` estimator (every
+//! light, one shadow ray each; not a sampler) beside them. Depends on `light` and `math`.
+
+mod power;
+mod uniform;
+
+pub use power::PowerSampler;
+pub use uniform::UniformSampler;
+
+use crate::light::{Light, LightId};
+use crate::math::Vec3A;
+
+/// Where a light is chosen for: a point and its (face-forwarded shading) normal. `n` is zero
+/// when the point is not on a surface. The same context must be used at `sample` time and
+/// when the pmf is re-evaluated for MIS.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadingContext {
+    /// Receiving point.
+    pub p: Vec3A,
+    /// Unit normal on the side light arrives from, or zero.
+    pub n: Vec3A,
+}
+
+/// A chosen light and the probability it was chosen with.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampledLight {
+    /// The light.
+    pub light: LightId,
+    /// Its probability (> 0).
+    pub pmf: f32,
+}
+
+/// Chooses one light for a shading point.
+///
+/// Contract: Σ over lights of `pmf(ctx, l)` ≤ 1, equal to 1 unless `sample` can return
+/// `None`; `pmf(ctx, l) == 0` only if `l` contributes nothing at `ctx`; `sample` consumes
+/// exactly the one number `u ∈ [0,1)` and reports the same pmf that `pmf` computes.
+pub trait LightSampler: Sync {
+    /// Picks a light with `u`; `None` when no light can contribute.
+    fn sample(&self, ctx: &ShadingContext, u: f32) -> Option<SampledLight>;
+    /// Probability that `sample` picks `light` at `ctx`.
+    fn pmf(&self, ctx: &ShadingContext, light: LightId) -> f32;
+}
+
+/// The light-selection strategies the `--sampler` switch names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LightSamplerKind {
+    /// Every light at every shading point, one shadow ray each (the seed's baseline; O(n)).
+    All,
+    /// One light, uniformly at random.
+    Uniform,
+    /// One light, with probability proportional to its emitted power.
+    Power,
+}
+
+impl LightSamplerKind {
+    /// The name used on the command line and in file headers.
+    pub fn name(self) -> &'static str {
+        match self {
+            LightSamplerKind::All => "all",
+            LightSamplerKind::Uniform => "uniform",
+            LightSamplerKind::Power => "power",
+        }
+    }
+}
+
+impl std::fmt::Display for LightSamplerKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// The runtime choice among the one-light samplers.
+#[derive(Clone, Debug)]
+pub enum AnyLightSampler {
+    /// See [`UniformSampler`].
+    Uniform(UniformSampler),
+    /// See [`PowerSampler`].
+    Power(PowerSampler),
+}
+
+impl LightSampler for AnyLightSampler {
+    #[inline]
+    fn sample(&self, ctx: &ShadingContext, u: f32) -> Option<SampledLight> {
+        match self {
+            AnyLightSampler::Uniform(s) => s.sample(ctx, u),
+            AnyLightSampler::Power(s) => s.sample(ctx, u),
+        }
+    }
+
+    #[inline]
+    fn pmf(&self, ctx: &ShadingContext, light: LightId) -> f32 {
+        match self {
+            AnyLightSampler::Uniform(s) => s.pmf(ctx, light),
+            AnyLightSampler::Power(s) => s.pmf(ctx, light),
+        }
+    }
+}
+
+impl AnyLightSampler {
+    /// Bytes of sampling tables held.
+    pub fn memory_bytes(&self) -> usize {
+        match self {
+            AnyLightSampler::Uniform(_) => 0,
+            AnyLightSampler::Power(s) => s.memory_bytes(),
+        }
+    }
+}
+
+/// How next-event estimation picks lights: all of them, or one through a sampler.
+#[derive(Clone, Debug)]
+pub enum LightStrategy {
+    /// Every light, one shadow ray each; selection pmf 1.
+    All,
+    /// One light per shading point.
+    One(AnyLightSampler),
+}
+
+impl LightStrategy {
+    /// Builds the strategy `kind` over `lights` (`scene_radius` sizes directional lights'
+    /// power). With no lights, every strategy is `All` (over nothing).
+    pub fn build(kind: LightSamplerKind, lights: &[Light], scene_radius: f32) -> Self {
+        if lights.is_empty() {
+            return LightStrategy::All;
+        }
+        match kind {
+            LightSamplerKind::All => LightStrategy::All,
+            LightSamplerKind::Uniform => {
+                LightStrategy::One(AnyLightSampler::Uniform(UniformSampler::new(lights.len())))
+            }
+            LightSamplerKind::Power => {
+                LightStrategy::One(AnyLightSampler::Power(PowerSampler::new(lights, scene_radius)))
+            }
+        }
+    }
+
+    /// Bytes of sampling tables held.
+    pub fn memory_bytes(&self) -> usize {
+        match self {
+            LightStrategy::All => 0,
+            LightStrategy::One(s) => s.memory_bytes(),
+        }
+    }
+}

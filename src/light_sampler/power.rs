@@ -1,0 +1,45 @@
+//! Power-proportional light selection: one CDF over emitted power, the same at every point.
+//!
+//! Lights whose power estimate is 0 would never be chosen, which biases the image whenever
+//! the estimate is wrong (pbrt drops them). Every light here gets at least a floor of 1e-6
+//! of the mean power, so nothing that can contribute has pmf 0.
+
+use super::{LightSampler, SampledLight, ShadingContext};
+use crate::light::{Light, LightId};
+use crate::math::distribution::Distribution1D;
+
+/// Picks lights with probability proportional to their power.
+#[derive(Clone, Debug)]
+pub struct PowerSampler {
+    distribution: Distribution1D,
+}
+
+impl PowerSampler {
+    /// A sampler over `lights` (non-empty); `scene_radius` sizes directional lights.
+    pub fn new(lights: &[Light], scene_radius: f32) -> Self {
+        let powers: Vec<f32> = lights.iter().map(|l| l.power(scene_radius).max(0.0)).collect();
+        let mean = powers.iter().map(|&p| p as f64).sum::<f64>() / powers.len().max(1) as f64;
+        let floor = if mean > 0.0 { (mean * 1e-6) as f32 } else { 1.0 };
+        let distribution = Distribution1D::new(powers.into_iter().map(|p| p.max(floor)))
+            .expect("light powers are finite and positive after the floor");
+        Self { distribution }
+    }
+
+    /// Bytes of the CDF.
+    pub fn memory_bytes(&self) -> usize {
+        self.distribution.memory_bytes()
+    }
+}
+
+impl LightSampler for PowerSampler {
+    #[inline]
+    fn sample(&self, _ctx: &ShadingContext, u: f32) -> Option<SampledLight> {
+        let s = self.distribution.sample(u);
+        Some(SampledLight { light: LightId(s.index as u32), pmf: s.pmf })
+    }
+
+    #[inline]
+    fn pmf(&self, _ctx: &ShadingContext, light: LightId) -> f32 {
+        self.distribution.pmf(light.0 as usize)
+    }
+}

@@ -1,0 +1,168 @@
+//! Surface scattering: materials as the scene stores them and the BSDFs they produce.
+//!
+//! Owns: [`Material`] (glTF metallic-roughness parameters, emission and sidedness, as every
+//! loader produces them), [`Bsdf`] (a `Copy` enum evaluated at one point, in a local frame)
+//! and [`ShadingPoint`] (a BSDF with its world frame: the face-forwarding and the
+//! geometric-normal test that stop light leaking through surfaces). Depends on `math`.
+//!
+//! Deviation from the architecture sketch: the closed set is {Lambertian, glTF
+//! metallic-roughness}; a conductor is metallic = 1 and there is no transmission yet.
+
+mod diffuse;
+mod metal_rough;
+mod microfacet;
+
+pub use diffuse::Diffuse;
+pub use metal_rough::MetalRough;
+pub use microfacet::Ggx;
+
+use crate::math::frame::Frame;
+use crate::math::{Rgb, Vec2, Vec3A};
+
+/// A sampled scattering direction.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfSample {
+    /// Incident direction (towards the next vertex).
+    pub wi: Vec3A,
+    /// f·|cos θi| / pdf.
+    pub weight: Rgb,
+    /// Solid-angle density of `wi`.
+    pub pdf: f32,
+}
+
+/// A BSDF at one point, in its local frame (normal = +Z, directions point away).
+#[derive(Clone, Copy, Debug)]
+pub enum Bsdf {
+    /// Lambertian.
+    Diffuse(Diffuse),
+    /// glTF metallic-roughness.
+    MetalRough(MetalRough),
+}
+
+impl Bsdf {
+    /// BSDF value, without the cosine.
+    #[inline]
+    pub fn eval(&self, wo: Vec3A, wi: Vec3A) -> Rgb {
+        match self {
+            Bsdf::Diffuse(b) => b.eval(wo, wi),
+            Bsdf::MetalRough(b) => b.eval(wo, wi),
+        }
+    }
+
+    /// Solid-angle density of [`Bsdf::sample`] returning `wi`.
+    #[inline]
+    pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
+        match self {
+            Bsdf::Diffuse(b) => b.pdf(wo, wi),
+            Bsdf::MetalRough(b) => b.pdf(wo, wi),
+        }
+    }
+
+    /// Samples an incident direction; `u_lobe` picks a lobe, `u` the direction in it.
+    #[inline]
+    pub fn sample(&self, wo: Vec3A, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        match self {
+            Bsdf::Diffuse(b) => b.sample(wo, u),
+            Bsdf::MetalRough(b) => b.sample(wo, u_lobe, u),
+        }
+    }
+}
+
+/// Surface appearance, as loaded (glTF metallic-roughness with emission).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Name, for messages and `info`.
+    pub name: String,
+    /// Base colour (linear).
+    pub base_color: Rgb,
+    /// Metalness in [0,1].
+    pub metallic: f32,
+    /// Perceptual roughness in [0,1].
+    pub roughness: f32,
+    /// KHR_materials_specular `specularFactor` in [0,1] (1 when absent in glTF).
+    pub specular: f32,
+    /// Emitted radiance (emissiveFactor × emissiveStrength), W/(m²·sr).
+    pub emission: Rgb,
+    /// Emits on both sides (glTF `doubleSided`); otherwise only on the counter-clockwise side.
+    pub double_sided: bool,
+}
+
+impl Material {
+    /// A Lambertian material.
+    pub fn diffuse(name: &str, albedo: Rgb) -> Self {
+        Self {
+            name: name.to_string(),
+            base_color: albedo,
+            metallic: 0.0,
+            roughness: 1.0,
+            specular: 0.0,
+            emission: Rgb::ZERO,
+            double_sided: true,
+        }
+    }
+
+    /// True when the surface emits light.
+    pub fn is_emissive(&self) -> bool {
+        self.emission.max_element() > 0.0
+    }
+
+    /// The BSDF at a point, or `None` when the surface reflects nothing (a black emitter).
+    #[inline]
+    pub fn bsdf(&self) -> Option<Bsdf> {
+        if self.metallic == 0.0 && self.specular == 0.0 {
+            if self.base_color.max_element() <= 0.0 {
+                return None;
+            }
+            return Some(Bsdf::Diffuse(Diffuse { albedo: self.base_color }));
+        }
+        Some(Bsdf::MetalRough(MetalRough::new(self.base_color, self.metallic, self.roughness, self.specular)))
+    }
+}
+
+/// A BSDF placed on a surface: world ↔ local frame, face-forwarded towards the viewer.
+#[derive(Clone, Copy, Debug)]
+pub struct ShadingPoint {
+    /// Shading frame; `frame.n` is on the viewer's side.
+    pub frame: Frame,
+    /// Geometric normal on the viewer's side.
+    pub ng: Vec3A,
+    /// The BSDF.
+    pub bsdf: Bsdf,
+}
+
+impl ShadingPoint {
+    /// Orients the normals towards `wo` (unit, pointing away from the surface).
+    #[inline]
+    pub fn new(bsdf: Bsdf, n_geom: Vec3A, n_shading: Vec3A, wo: Vec3A) -> Self {
+        let ng = if n_geom.dot(wo) < 0.0 { -n_geom } else { n_geom };
+        let ns = if n_shading.dot(ng) < 0.0 { -n_shading } else { n_shading };
+        Self { frame: Frame::from_normal(ns), ng, bsdf }
+    }
+
+    /// f(wo, wi)·|cos θi| for world directions; zero when `wi` goes below the geometric surface.
+    #[inline]
+    pub fn eval_cos(&self, wo: Vec3A, wi: Vec3A) -> Rgb {
+        if wi.dot(self.ng) <= 0.0 {
+            return Rgb::ZERO;
+        }
+        let (lo, li) = (self.frame.to_local(wo), self.frame.to_local(wi));
+        self.bsdf.eval(lo, li) * li.z.abs()
+    }
+
+    /// Density of sampling world direction `wi`.
+    #[inline]
+    pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
+        if wi.dot(self.ng) <= 0.0 {
+            return 0.0;
+        }
+        self.bsdf.pdf(self.frame.to_local(wo), self.frame.to_local(wi))
+    }
+
+    /// Samples a world direction.
+    #[inline]
+    pub fn sample(&self, wo: Vec3A, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        let s = self.bsdf.sample(self.frame.to_local(wo), u_lobe, u)?;
+        let wi = self.frame.to_world(s.wi);
+        (wi.dot(self.ng) > 0.0).then_some(BsdfSample { wi, ..s })
+    }
+}

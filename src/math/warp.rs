@@ -1,0 +1,144 @@
+//! Warps from the unit square to the shapes we sample, each with its density.
+//!
+//! Owns: pure functions `[0,1)² → domain` and the matching pdf in the domain's measure.
+//! References: Shirley & Chiu 1997 (concentric disk), pbrt-v4 `sampling.h` (cosine hemisphere,
+//! uniform triangle in the low-distortion form of Heitz 2019), Malley's method.
+
+use super::{Vec2, Vec3A};
+use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4, PI};
+
+/// Concentric map of the square onto the unit disk (Shirley & Chiu); density 1/π.
+#[inline]
+pub fn square_to_disk_concentric(u: Vec2) -> Vec2 {
+    let o = 2.0 * u - Vec2::ONE;
+    if o.x == 0.0 && o.y == 0.0 {
+        return Vec2::ZERO;
+    }
+    let (r, theta) =
+        if o.x.abs() > o.y.abs() { (o.x, FRAC_PI_4 * (o.y / o.x)) } else { (o.y, FRAC_PI_2 - FRAC_PI_4 * (o.x / o.y)) };
+    r * Vec2::new(theta.cos(), theta.sin())
+}
+
+/// Cosine-weighted direction on the +Z hemisphere (Malley's method).
+#[inline]
+pub fn square_to_cosine_hemisphere(u: Vec2) -> Vec3A {
+    let d = square_to_disk_concentric(u);
+    let z = (1.0 - d.length_squared()).max(0.0).sqrt();
+    Vec3A::new(d.x, d.y, z)
+}
+
+/// Density of [`square_to_cosine_hemisphere`] in solid angle.
+#[inline]
+pub fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
+    cos_theta.max(0.0) * FRAC_1_PI
+}
+
+/// Uniform direction on the unit sphere; density 1/(4π).
+#[inline]
+pub fn square_to_uniform_sphere(u: Vec2) -> Vec3A {
+    let z = 1.0 - 2.0 * u.x;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    Vec3A::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// Density of [`square_to_uniform_sphere`] in solid angle.
+pub const UNIFORM_SPHERE_PDF: f32 = 0.25 * FRAC_1_PI;
+
+/// Uniform barycentrics (b0, b1, b2) on a triangle; density 1/area.
+///
+/// Heitz 2019, "A Low-Distortion Map Between Triangle and Square": neighbouring `u` stay
+/// neighbours on the triangle, unlike the square-root map.
+#[inline]
+pub fn square_to_triangle(u: Vec2) -> [f32; 3] {
+    let (b0, b1) = if u.x < u.y {
+        let b0 = u.x / 2.0;
+        (b0, u.y - b0)
+    } else {
+        let b1 = u.y / 2.0;
+        (u.x - b1, b1)
+    };
+    [b0, b1, 1.0 - b0 - b1]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(n: usize) -> impl Iterator<Item = Vec2> {
+        (0..n * n).map(move |i| Vec2::new(((i % n) as f32 + 0.5) / n as f32, ((i / n) as f32 + 0.5) / n as f32))
+    }
+
+    #[test]
+    fn disk_points_lie_in_disk_and_cover_it_uniformly() {
+        let n = 200;
+        let mut inner = 0usize;
+        for u in grid(n) {
+            let p = square_to_disk_concentric(u);
+            assert!(p.length() <= 1.0 + 1e-6);
+            if p.length() < 0.5 {
+                inner += 1;
+            }
+        }
+        // A disk of radius 0.5 holds a quarter of the area.
+        let frac = inner as f32 / (n * n) as f32;
+        assert!((frac - 0.25).abs() < 0.01, "{frac}");
+    }
+
+    #[test]
+    fn cosine_hemisphere_matches_its_pdf() {
+        // Under p = cos θ/π: P(θ < 60°) = sin²60° = 3/4 and E[cos θ] = 2/3.
+        let n = 300;
+        let (mut inside, mut mean_z) = (0usize, 0.0f64);
+        for u in grid(n) {
+            let d = square_to_cosine_hemisphere(u);
+            assert!((d.length() - 1.0).abs() < 1e-4 && d.z >= 0.0);
+            inside += (d.z > 0.5) as usize;
+            mean_z += d.z as f64;
+        }
+        let m = (n * n) as f64;
+        assert!((inside as f64 / m - 0.75).abs() < 2e-3, "{}", inside as f64 / m);
+        assert!((mean_z / m - 2.0 / 3.0).abs() < 1e-3, "{}", mean_z / m);
+        assert!((cosine_hemisphere_pdf(1.0) - FRAC_1_PI).abs() < 1e-7 && cosine_hemisphere_pdf(-0.5) == 0.0);
+    }
+
+    #[test]
+    fn uniform_sphere_is_uniform_in_z() {
+        let n = 100;
+        let mut hist = [0usize; 4];
+        for u in grid(n) {
+            let d = square_to_uniform_sphere(u);
+            assert!((d.length() - 1.0).abs() < 1e-4);
+            hist[(((d.z + 1.0) * 2.0) as usize).min(3)] += 1;
+        }
+        for h in hist {
+            assert_eq!(h, n * n / 4);
+        }
+    }
+
+    #[test]
+    fn triangle_barycentrics_are_uniform() {
+        let n = 200;
+        let mut hist = [0usize; 4];
+        for u in grid(n) {
+            let b = square_to_triangle(u);
+            assert!(b.iter().all(|&x| (-1e-6..=1.0 + 1e-6).contains(&x)));
+            assert!((b[0] + b[1] + b[2] - 1.0).abs() < 1e-6);
+            // The 4 sub-triangles of the midpoint subdivision have equal area.
+            let cell = if b[0] > 0.5 {
+                0
+            } else if b[1] > 0.5 {
+                1
+            } else if b[2] > 0.5 {
+                2
+            } else {
+                3
+            };
+            hist[cell] += 1;
+        }
+        for h in hist {
+            let f = h as f32 / (n * n) as f32;
+            assert!((f - 0.25).abs() < 0.01, "{hist:?}");
+        }
+    }
+}

@@ -1,0 +1,345 @@
+//! `SceneDescription` → `Scene`: validate, place instances, turn emitters into lights, build
+//! the BVH.
+//!
+//! Every check names the file and the object, so that a bad scene is an error a user can act
+//! on, never a panic or a silently black image.
+
+use std::time::Instant;
+
+use super::description::{CameraPlacement, InstanceDesc, LightDesc, MeshDesc, SceneDescription};
+use super::{Scene, SceneStats};
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+use crate::geometry::{GeometryBuilder, NO_LIGHT};
+use crate::light::{AreaEmission, DistantLight, Light, PointLight, QuadLight, SpotLight, TriangleLight};
+use crate::material::Material;
+use crate::math::{Mat3, Rgb, UVec2, Vec3A};
+
+/// Choices made when building, usually from the command line.
+#[derive(Clone, Debug, Default)]
+pub struct BuildOptions {
+    /// Output size; default: the scene's, else 640 wide at the camera's aspect ratio.
+    pub resolution: Option<UVec2>,
+    /// Camera to use, by name; default: the first.
+    pub camera: Option<String>,
+}
+
+/// Width used when neither the command line nor the scene gives a resolution.
+const DEFAULT_WIDTH: u32 = 640;
+
+fn check_color(file: &str, what: &str, name: &str, c: Rgb, max: Option<f32>) -> Result<()> {
+    if !c.is_finite() {
+        return Err(Error::scene(file, what, format!("{name} has a non-finite component {c}")));
+    }
+    if c.min_element() < 0.0 {
+        return Err(Error::scene(
+            file,
+            what,
+            format!("{name} has a negative component {c}; light and colour must be ≥ 0"),
+        ));
+    }
+    if let Some(m) = max
+        && c.max_element() > m
+    {
+        return Err(Error::scene(
+            file,
+            what,
+            format!("{name} {c} exceeds {m}: a surface cannot reflect more than it receives"),
+        ));
+    }
+    Ok(())
+}
+
+fn check_unit(file: &str, what: &str, name: &str, x: f32) -> Result<()> {
+    if !(0.0..=1.0).contains(&x) {
+        return Err(Error::scene(file, what, format!("{name} must be in [0, 1], not {x}")));
+    }
+    Ok(())
+}
+
+fn validate_material(file: &str, m: &Material) -> Result<()> {
+    let what = format!("material '{}'", m.name);
+    check_color(file, &what, "base colour", m.base_color, Some(1.0))?;
+    check_color(file, &what, "emission", m.emission, None)?;
+    check_unit(file, &what, "metallic", m.metallic)?;
+    check_unit(file, &what, "roughness", m.roughness)?;
+    check_unit(file, &what, "specular", m.specular)
+}
+
+fn validate_mesh(file: &str, index: usize, m: &MeshDesc, materials: usize) -> Result<()> {
+    let what = format!("mesh {index} '{}'", m.name);
+    if let Some(i) = m.positions.iter().position(|p| !p.is_finite()) {
+        return Err(Error::scene(file, what, format!("vertex {i} has a non-finite coordinate {}", m.positions[i])));
+    }
+    let n = m.positions.len() as u32;
+    if let Some(t) = m.triangles.iter().position(|t| t.iter().any(|&i| i >= n)) {
+        return Err(Error::scene(
+            file,
+            what,
+            format!("triangle {t} uses vertex {:?}, but there are {n} vertices", m.triangles[t]),
+        ));
+    }
+    let count_ok = |len: Option<usize>| len.is_none_or(|l| l >= m.positions.len());
+    if !count_ok(m.normals.as_ref().map(Vec::len)) || !count_ok(m.uvs.as_ref().map(Vec::len)) {
+        return Err(Error::scene(file, what, "fewer normals or UVs than positions"));
+    }
+    if m.material as usize >= materials {
+        return Err(Error::scene(
+            file,
+            what,
+            format!("material index {} out of range ({materials} materials)", m.material),
+        ));
+    }
+    if m.quads && !m.triangles.len().is_multiple_of(2) {
+        return Err(Error::scene(file, what, "a quad mesh needs an even number of triangles"));
+    }
+    Ok(())
+}
+
+fn finite3(file: &str, what: &str, name: &str, v: Vec3A) -> Result<()> {
+    if v.is_finite() { Ok(()) } else { Err(Error::scene(file, what, format!("{name} {v} is not finite"))) }
+}
+
+/// Adds every triangle of `inst` to `geo`, creating lights for emissive ones.
+fn place_instance(
+    desc: &SceneDescription,
+    inst: &InstanceDesc,
+    geo: &mut GeometryBuilder,
+    lights: &mut Vec<Light>,
+    stats: &mut SceneStats,
+    degenerate_emitters: &mut usize,
+) {
+    let mesh = &desc.meshes[inst.mesh as usize];
+    let material = &desc.materials[mesh.material as usize];
+    let m = inst.transform;
+    let normal_matrix = Mat3::from_mat4(m).inverse().transpose();
+    // A mirroring transform reverses the winding; swap two corners to keep the front side.
+    let flip = Mat3::from_mat4(m).determinant() < 0.0;
+    let positions: Vec<Vec3A> = mesh.positions.iter().map(|&p| m.transform_point3a(p)).collect();
+    let normals: Option<Vec<Vec3A>> = mesh
+        .normals
+        .as_ref()
+        .map(|ns| ns.iter().map(|&n| Vec3A::from(normal_matrix * glam::Vec3::from(n)).normalize_or_zero()).collect());
+    let base = geo.push_vertices(normals.as_deref(), mesh.uvs.as_deref(), positions.len());
+    let has_attr = mesh.normals.is_some() || mesh.uvs.is_some();
+    let emission = AreaEmission { radiance: material.emission, two_sided: material.double_sided };
+    let emissive = material.is_emissive();
+    let corners = |t: [u32; 3]| if flip { [t[0], t[2], t[1]] } else { t };
+    stats.instances += 1;
+
+    let push = |t: [u32; 3], light: u32, geo: &mut GeometryBuilder| {
+        let t = corners(t);
+        let attr = has_attr.then(|| (t.map(|i| base + i), mesh.normals.is_some(), mesh.uvs.is_some()));
+        geo.push_triangle(t.map(|i| positions[i as usize]), attr, mesh.material, light);
+    };
+    if emissive && mesh.quads {
+        for pair in mesh.triangles.chunks_exact(2) {
+            let [a, b, _] = pair[0].map(|i| positions[i as usize]);
+            let d = positions[pair[1][2] as usize];
+            let (e1, e2) = if flip { (d - a, b - a) } else { (b - a, d - a) };
+            let id = match QuadLight::new(a, e1, e2, emission) {
+                Some(q) => {
+                    lights.push(Light::Quad(q));
+                    stats.emissive_triangles += 2;
+                    (lights.len() - 1) as u32
+                }
+                None => {
+                    *degenerate_emitters += 2;
+                    NO_LIGHT
+                }
+            };
+            push(pair[0], id, geo);
+            push(pair[1], id, geo);
+        }
+        return;
+    }
+    for &t in &mesh.triangles {
+        let mut id = NO_LIGHT;
+        if emissive {
+            match TriangleLight::new(corners(t).map(|i| positions[i as usize]), emission) {
+                Some(l) => {
+                    lights.push(Light::Triangle(l));
+                    stats.emissive_triangles += 1;
+                    id = (lights.len() - 1) as u32;
+                }
+                None => *degenerate_emitters += 1,
+            }
+        }
+        push(t, id, geo);
+    }
+}
+
+/// Validates `desc` and builds the scene (BVH built in the current rayon pool).
+pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
+    let start = Instant::now();
+    let file = desc.source.as_str();
+    for m in &desc.materials {
+        validate_material(file, m)?;
+    }
+    for (i, m) in desc.meshes.iter().enumerate() {
+        validate_mesh(file, i, m, desc.materials.len())?;
+    }
+    for inst in &desc.instances {
+        if inst.mesh as usize >= desc.meshes.len() || !inst.transform.is_finite() {
+            return Err(Error::scene(
+                file,
+                format!("instance '{}'", inst.name),
+                "refers to a missing mesh or has a non-finite transform",
+            ));
+        }
+    }
+
+    // Camera and resolution.
+    let cam_desc = match &opts.camera {
+        Some(name) => desc.cameras.iter().find(|c| &c.name == name).ok_or_else(|| {
+            let names: Vec<&str> = desc.cameras.iter().map(|c| c.name.as_str()).collect();
+            Error::scene(file, "cameras", format!("no camera named '{name}'; the scene has {names:?}"))
+        })?,
+        None => desc.cameras.first().ok_or_else(|| {
+            Error::scene(
+                file,
+                "cameras",
+                "the scene has no camera; add one (in Blender: a camera object, exported with 'Cameras' on)",
+            )
+        })?,
+    };
+    let resolution = opts.resolution.or(desc.resolution).unwrap_or_else(|| {
+        let aspect = cam_desc.aspect_ratio.filter(|a| *a > 0.0 && a.is_finite()).unwrap_or(4.0 / 3.0);
+        UVec2::new(DEFAULT_WIDTH, ((DEFAULT_WIDTH as f32 / aspect).round() as u32).max(1))
+    });
+    let camera = match cam_desc.placement {
+        CameraPlacement::LookAt { eye, target, up } => Camera::look_at(eye, target, up, cam_desc.yfov, resolution),
+        CameraPlacement::Matrix(m) => Camera::from_matrix(&m, cam_desc.yfov, resolution),
+    }
+    .ok_or_else(|| {
+        Error::scene(
+            file,
+            format!("camera '{}'", cam_desc.name),
+            "degenerate: eye equals target, up is parallel to the view, or the field of view is not in (0°, 180°)",
+        )
+    })?;
+
+    let mut materials = desc.materials.clone();
+    let mut stats = SceneStats::default();
+    let mut lights: Vec<Light> = Vec::new();
+    let mut geo = GeometryBuilder::default();
+    let mut degenerate_emitters = 0usize;
+    for inst in &desc.instances {
+        place_instance(&desc, inst, &mut geo, &mut lights, &mut stats, &mut degenerate_emitters);
+    }
+
+    // Lights that are not meshes.
+    let mut emitter_material = None;
+    for (i, l) in desc.lights.iter().enumerate() {
+        let light = match l {
+            LightDesc::Point { name, position, intensity } => {
+                let what = format!("light {i} '{name}'");
+                finite3(file, &what, "position", *position)?;
+                check_color(file, &what, "intensity", *intensity, None)?;
+                Light::Point(PointLight { position: *position, intensity: *intensity })
+            }
+            LightDesc::Spot { name, position, direction, intensity, inner_angle, outer_angle } => {
+                let what = format!("light {i} '{name}'");
+                finite3(file, &what, "position", *position)?;
+                check_color(file, &what, "intensity", *intensity, None)?;
+                let direction = direction
+                    .try_normalize()
+                    .ok_or_else(|| Error::scene(file, &what, "direction must be a non-zero vector"))?;
+                if !(*outer_angle > 0.0
+                    && *outer_angle <= std::f32::consts::PI
+                    && *inner_angle >= 0.0
+                    && inner_angle <= outer_angle)
+                {
+                    return Err(Error::scene(
+                        file,
+                        what,
+                        format!("cone angles need 0 ≤ inner ({inner_angle}) ≤ outer ({outer_angle}) ≤ π, outer > 0"),
+                    ));
+                }
+                Light::Spot(SpotLight {
+                    position: *position,
+                    direction,
+                    intensity: *intensity,
+                    cos_inner: inner_angle.cos(),
+                    cos_outer: outer_angle.cos(),
+                })
+            }
+            LightDesc::Directional { name, direction, irradiance } => {
+                let what = format!("light {i} '{name}'");
+                check_color(file, &what, "irradiance", *irradiance, None)?;
+                let direction = direction
+                    .try_normalize()
+                    .ok_or_else(|| Error::scene(file, &what, "direction must be a non-zero vector"))?;
+                Light::Distant(DistantLight { direction, irradiance: *irradiance })
+            }
+            LightDesc::Quad { name, corner, edge1, edge2, radiance, two_sided } => {
+                let what = format!("light {i} '{name}'");
+                finite3(file, &what, "corner", *corner)?;
+                finite3(file, &what, "edge1", *edge1)?;
+                finite3(file, &what, "edge2", *edge2)?;
+                check_color(file, &what, "radiance", *radiance, None)?;
+                let q = QuadLight::new(
+                    *corner,
+                    *edge1,
+                    *edge2,
+                    AreaEmission { radiance: *radiance, two_sided: *two_sided },
+                )
+                .ok_or_else(|| Error::scene(file, &what, "zero area: its two edges are parallel or zero"))?;
+                let mat = *emitter_material.get_or_insert_with(|| {
+                    materials.push(Material { name: "<light>".into(), ..Material::diffuse("", Rgb::ZERO) });
+                    (materials.len() - 1) as u32
+                });
+                let id = lights.len() as u32;
+                for t in q.triangles() {
+                    geo.push_triangle(t, None, mat, id);
+                }
+                stats.emissive_triangles += 2;
+                Light::Quad(q)
+            }
+        };
+        lights.push(light);
+    }
+
+    let mut warnings = desc.warnings.clone();
+    if degenerate_emitters > 0 {
+        warnings.push(format!("{degenerate_emitters} emissive triangles have zero area and do not emit"));
+    }
+
+    // Bounds of everything, for directional lights and reports.
+    let (mut lo, mut hi) = (Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN));
+    let (geometry, _) = geo.build();
+    for t in 0..geometry.triangle_count() as u32 {
+        for v in geometry.accel.vertices(t) {
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+    }
+    for l in &lights {
+        if let Light::Point(PointLight { position, .. }) | Light::Spot(SpotLight { position, .. }) = l {
+            lo = lo.min(*position);
+            hi = hi.max(*position);
+        }
+    }
+    let (center, radius) =
+        if lo.x <= hi.x { (0.5 * (lo + hi), (0.5 * (hi - lo).length()).max(1e-3)) } else { (Vec3A::ZERO, 1.0) };
+
+    let accel = geometry.accel.stats();
+    stats.triangles = geometry.triangle_count();
+    stats.bvh_build_time = accel.build_time;
+    stats.geometry_bytes = geometry.memory_bytes();
+    stats.light_bytes = lights.capacity() * std::mem::size_of::<Light>();
+    stats.build_time = start.elapsed();
+    Ok(Scene {
+        source: desc.source.clone(),
+        camera,
+        camera_name: cam_desc.name.clone(),
+        geometry,
+        materials,
+        lights,
+        center,
+        radius,
+        render: desc.render,
+        stats,
+        warnings,
+    })
+}

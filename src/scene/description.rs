@@ -1,0 +1,161 @@
+//! `SceneDescription`: the plain-data scene every loader produces and `scene::build` consumes.
+//!
+//! Owns: the loader-neutral intermediate representation. RON, OBJ and glTF files all become
+//! this; nothing here touches files or builds acceleration structures. Meshes are stored once
+//! in object space and placed by instances, so a loader never has to flatten. Positions and
+//! colours are validated by `scene::build`, not here.
+
+use std::sync::Arc;
+
+use crate::light_sampler::LightSamplerKind;
+use crate::material::Material;
+use crate::math::{Mat4, Rgb, UVec2, Vec2, Vec3A};
+
+/// A whole scene, before validation and acceleration-structure building.
+#[derive(Clone, Debug, Default)]
+pub struct SceneDescription {
+    /// The file it came from, for messages (may be a label such as `<built-in>`).
+    pub source: String,
+    /// Cameras; the first is used unless another is asked for by name.
+    pub cameras: Vec<CameraDesc>,
+    /// Output size the scene asks for, if any.
+    pub resolution: Option<UVec2>,
+    /// Render settings the scene asks for; the command line overrides them.
+    pub render: RenderDefaults,
+    /// Materials, indexed by [`MeshDesc::material`].
+    pub materials: Vec<Material>,
+    /// Triangle meshes in object space.
+    pub meshes: Vec<MeshDesc>,
+    /// Placements of meshes in the world.
+    pub instances: Vec<InstanceDesc>,
+    /// Lights that are not emissive meshes.
+    pub lights: Vec<LightDesc>,
+    /// Things the loader skipped or approximated, for the user.
+    pub warnings: Vec<String>,
+}
+
+/// Render settings a scene file may carry. `None` means "use myriad's default".
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RenderDefaults {
+    /// Samples per pixel.
+    pub spp: Option<u32>,
+    /// Maximum number of scattering events.
+    pub max_depth: Option<u32>,
+    /// Light sampler.
+    pub sampler: Option<LightSamplerKind>,
+    /// Random seed.
+    pub seed: Option<u64>,
+}
+
+/// A perspective camera.
+#[derive(Clone, Debug)]
+pub struct CameraDesc {
+    /// Name (glTF node or camera name).
+    pub name: String,
+    /// Placement.
+    pub placement: CameraPlacement,
+    /// Vertical field of view, radians.
+    pub yfov: f32,
+    /// Width/height the camera was authored for, if known (glTF `aspectRatio`).
+    pub aspect_ratio: Option<f32>,
+}
+
+/// How a camera is placed in the world.
+#[derive(Clone, Copy, Debug)]
+pub enum CameraPlacement {
+    /// Eye, target and up vector.
+    LookAt {
+        /// Eye position.
+        eye: Vec3A,
+        /// Point looked at.
+        target: Vec3A,
+        /// Up direction.
+        up: Vec3A,
+    },
+    /// A node's world matrix; the camera looks down local −Z with +Y up (glTF).
+    Matrix(Mat4),
+}
+
+/// An indexed triangle mesh in object space with one material.
+#[derive(Clone, Debug, Default)]
+pub struct MeshDesc {
+    /// Name, for messages.
+    pub name: String,
+    /// Vertex positions.
+    pub positions: Vec<Vec3A>,
+    /// Vertex normals, when the file has them (flat shading otherwise).
+    pub normals: Option<Vec<Vec3A>>,
+    /// Vertex texture coordinates.
+    pub uvs: Option<Vec<Vec2>>,
+    /// Triangles as vertex-index triples, counter-clockwise seen from the front.
+    pub triangles: Vec<[u32; 3]>,
+    /// Material index.
+    pub material: u32,
+    /// Triangles `2k, 2k+1` form parallelogram `k` (corners a,b,c and a,c,d): an emissive
+    /// material then makes one quad light per pair instead of two triangle lights.
+    pub quads: bool,
+}
+
+/// One placement of a mesh.
+#[derive(Clone, Debug)]
+pub struct InstanceDesc {
+    /// Index into [`SceneDescription::meshes`].
+    pub mesh: u32,
+    /// Object-to-world transform.
+    pub transform: Mat4,
+    /// Name, for messages (node name).
+    pub name: String,
+}
+
+/// A light that is not an emissive mesh.
+#[derive(Clone, Debug)]
+pub enum LightDesc {
+    /// Isotropic point light.
+    Point {
+        /// Label for messages.
+        name: Arc<str>,
+        /// Position.
+        position: Vec3A,
+        /// Radiant intensity [W/sr].
+        intensity: Rgb,
+    },
+    /// Spot light (KHR_lights_punctual falloff).
+    Spot {
+        /// Label for messages.
+        name: Arc<str>,
+        /// Position.
+        position: Vec3A,
+        /// Direction the cone points to.
+        direction: Vec3A,
+        /// On-axis radiant intensity [W/sr].
+        intensity: Rgb,
+        /// Inner cone half-angle, radians.
+        inner_angle: f32,
+        /// Outer cone half-angle, radians.
+        outer_angle: f32,
+    },
+    /// Directional light.
+    Directional {
+        /// Label for messages.
+        name: Arc<str>,
+        /// Direction the light travels in.
+        direction: Vec3A,
+        /// Irradiance perpendicular to the beam [W/m²].
+        irradiance: Rgb,
+    },
+    /// Emissive parallelogram `corner + s·edge1 + t·edge2`, front side along `edge1 × edge2`.
+    Quad {
+        /// Label for messages (shared by all cells of a grid).
+        name: Arc<str>,
+        /// Corner.
+        corner: Vec3A,
+        /// First edge.
+        edge1: Vec3A,
+        /// Second edge.
+        edge2: Vec3A,
+        /// Radiance [W/(m²·sr)].
+        radiance: Rgb,
+        /// Emits from both faces.
+        two_sided: bool,
+    },
+}

@@ -1,0 +1,315 @@
+//! The RON scene format: these types *are* its reference (field docs = manual).
+//!
+//! A file is one `Scene(...)` with `#![enable(implicit_some)]` implied, so optional fields take
+//! their value directly. Every struct denies unknown fields, so a typo is an error with line
+//! and column. Units: metres, radians only where a name says `_rad`, degrees where it says
+//! `_deg`; colours are linear Rec.709. Paths are relative to the scene file. Example:
+//!
+//! ```ron
+//! Scene(
+//!     camera: Perspective(eye: (0, 1, 4.4), look_at: (0, 1, 0), yfov_deg: 37),
+//!     film: (resolution: (320, 240)),
+//!     render: (spp: 64, max_depth: 8, sampler: power),
+//!     materials: { "white": Diffuse(albedo: (0.73, 0.73, 0.73)) },
+//!     objects: [ Quad(corner: (-1, 0, 1), edge1: (2, 0, 0), edge2: (0, 0, -2), material: "white") ],
+//!     lights: [ Grid(center: (0, 1.99, 0), normal: (0, -1, 0), extent: (1.2, 1.2), rows: 5, cols: 5,
+//!                    fill: 0.25, emission: Power(watts: 45, color: (1, 1, 1))) ],
+//! )
+//! ```
+
+use std::collections::BTreeMap;
+
+use serde::Deserialize;
+
+use crate::light_sampler::LightSamplerKind;
+
+/// Three numbers: a point, a direction or a colour.
+pub type V3 = [f32; 3];
+
+/// The whole file.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Scene")]
+pub struct SceneFile {
+    /// The camera.
+    pub camera: CameraSpec,
+    /// Image settings.
+    #[serde(default)]
+    pub film: FilmSpec,
+    /// Render defaults (the command line overrides each).
+    #[serde(default)]
+    pub render: RenderSpec,
+    /// Named materials, referred to by objects.
+    #[serde(default)]
+    pub materials: BTreeMap<String, MaterialSpec>,
+    /// Surfaces.
+    #[serde(default)]
+    pub objects: Vec<ObjectSpec>,
+    /// Lights (besides objects with emissive materials).
+    #[serde(default)]
+    pub lights: Vec<LightSpec>,
+}
+
+/// Camera.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum CameraSpec {
+    /// Pinhole camera.
+    Perspective {
+        /// Eye position.
+        eye: V3,
+        /// Point looked at.
+        look_at: V3,
+        /// Up direction (default +Y).
+        #[serde(default = "default_up")]
+        up: V3,
+        /// Vertical field of view in degrees.
+        yfov_deg: f32,
+    },
+}
+
+fn default_up() -> V3 {
+    [0.0, 1.0, 0.0]
+}
+
+/// Image settings.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FilmSpec {
+    /// Width and height in pixels (default 640 × 480).
+    pub resolution: Option<(u32, u32)>,
+}
+
+/// Render defaults.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenderSpec {
+    /// Samples per pixel.
+    pub spp: Option<u32>,
+    /// Maximum scattering events (1 = direct lighting only).
+    pub max_depth: Option<u32>,
+    /// Light sampler: `all`, `uniform`, `power`.
+    pub sampler: Option<LightSamplerKind>,
+    /// Random seed.
+    pub seed: Option<u64>,
+}
+
+/// A material.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum MaterialSpec {
+    /// Lambertian reflector.
+    Diffuse {
+        /// Reflectance per channel, in [0,1].
+        albedo: V3,
+    },
+    /// glTF metallic-roughness (GGX with Schlick Fresnel).
+    MetalRough {
+        /// Base colour.
+        base_color: V3,
+        /// Metalness in [0,1].
+        #[serde(default)]
+        metallic: f32,
+        /// Perceptual roughness in [0,1] (alpha = roughness²).
+        #[serde(default = "one")]
+        roughness: f32,
+        /// KHR_materials_specular `specularFactor` (default 1).
+        #[serde(default = "one")]
+        specular: f32,
+    },
+    /// A light-emitting surface (diffuse emission).
+    Emissive {
+        /// Radiance in W/(m²·sr) per channel.
+        radiance: V3,
+        /// Emit from both faces (default: only the front, counter-clockwise face).
+        #[serde(default)]
+        two_sided: bool,
+        /// Diffuse reflectance of the emitter (default black).
+        #[serde(default)]
+        albedo: V3,
+    },
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+/// Translation, rotation (degrees about X, then Y, then Z) and scale, applied scale first.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TransformSpec {
+    /// Translation (default none).
+    #[serde(default)]
+    pub translate: V3,
+    /// Euler angles in degrees, applied X then Y then Z (default none).
+    #[serde(default)]
+    pub rotate_deg: V3,
+    /// Scale per axis (default 1).
+    pub scale: Option<V3>,
+}
+
+/// A surface.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum ObjectSpec {
+    /// Parallelogram `corner + s·edge1 + t·edge2`; the front faces along `edge1 × edge2`.
+    Quad {
+        /// Corner.
+        corner: V3,
+        /// First edge.
+        edge1: V3,
+        /// Second edge.
+        edge2: V3,
+        /// Material name.
+        material: String,
+    },
+    /// Axis-aligned box of size `size` centred at the origin, then transformed.
+    Box {
+        /// Edge lengths.
+        size: V3,
+        /// Placement.
+        #[serde(default)]
+        transform: TransformSpec,
+        /// Material name.
+        material: String,
+    },
+    /// Sphere tessellated as an icosphere with smooth normals.
+    Sphere {
+        /// Centre.
+        center: V3,
+        /// Radius.
+        radius: f32,
+        /// Subdivisions of the icosahedron (default 3: 1280 triangles).
+        #[serde(default = "default_subdivisions")]
+        subdivisions: u32,
+        /// Material name.
+        material: String,
+    },
+    /// Triangle mesh from a Wavefront `.obj` file.
+    Mesh {
+        /// Path, relative to the scene file.
+        path: String,
+        /// Placement.
+        #[serde(default)]
+        transform: TransformSpec,
+        /// Material for every triangle; default: the file's own materials (`.mtl`).
+        material: Option<String>,
+    },
+}
+
+fn default_subdivisions() -> u32 {
+    3
+}
+
+/// A light.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum LightSpec {
+    /// Isotropic point light.
+    Point {
+        /// Position.
+        position: V3,
+        /// Radiant intensity in W/sr per channel.
+        intensity: V3,
+    },
+    /// Spot light (KHR_lights_punctual falloff between the cones).
+    Spot {
+        /// Position.
+        position: V3,
+        /// Direction the cone points to.
+        direction: V3,
+        /// On-axis radiant intensity in W/sr per channel.
+        intensity: V3,
+        /// Inner cone half-angle in degrees (full intensity inside; default 0).
+        #[serde(default)]
+        inner_deg: f32,
+        /// Outer cone half-angle in degrees (dark outside).
+        outer_deg: f32,
+    },
+    /// Directional light (sun).
+    Directional {
+        /// Direction the light travels in.
+        direction: V3,
+        /// Irradiance perpendicular to the beam, W/m² per channel.
+        irradiance: V3,
+    },
+    /// One emissive parallelogram `corner + s·edge1 + t·edge2`, front along `edge1 × edge2`.
+    Quad {
+        /// Corner.
+        corner: V3,
+        /// First edge.
+        edge1: V3,
+        /// Second edge.
+        edge2: V3,
+        /// Radiance in W/(m²·sr) per channel.
+        radiance: V3,
+        /// Emit from both faces (default false).
+        #[serde(default)]
+        two_sided: bool,
+    },
+    /// `rows × cols` emissive quads on a plane: the many-light workhorse.
+    Grid(GridSpec),
+}
+
+/// A grid of lamps. Cells tile `extent`; each lamp is a square-ish quad centred in its cell
+/// covering `fill` of the cell's area. Columns run along `tangent`, rows along
+/// `normal × tangent`; lamps face `normal`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GridSpec {
+    /// Centre of the grid.
+    pub center: V3,
+    /// Direction the lamps face (emit towards).
+    pub normal: V3,
+    /// In-plane direction of the columns (default: X, or Z when the normal is along X);
+    /// projected onto the plane.
+    pub tangent: Option<V3>,
+    /// Size of the whole grid along tangent and bitangent, metres.
+    pub extent: (f32, f32),
+    /// Number of rows (along the bitangent).
+    pub rows: u32,
+    /// Number of columns (along the tangent).
+    pub cols: u32,
+    /// Fraction of each cell's area a lamp covers, in (0, 1] (default 0.25).
+    #[serde(default = "default_fill")]
+    pub fill: f32,
+    /// How bright: per-lamp radiance, or the total power of the grid.
+    pub emission: GridEmission,
+    /// Relative colour variation: each channel × (1 + jitter·(2u − 1)), u uniform (default 0).
+    #[serde(default)]
+    pub color_jitter: f32,
+    /// Intensity spread: each lamp × 10^(decades·u), u uniform (log-uniform; default 0).
+    #[serde(default)]
+    pub decades: f32,
+    /// Seed of the variations (default 0).
+    #[serde(default)]
+    pub seed: u64,
+    /// Lamps emit from both faces (default false).
+    #[serde(default)]
+    pub two_sided: bool,
+}
+
+fn default_fill() -> f32 {
+    0.25
+}
+
+/// Brightness of a grid. After the random variations the lamps are rescaled so that the mean
+/// luminance (radiance) or the total power is exactly what is asked.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum GridEmission {
+    /// Mean radiance of a lamp, W/(m²·sr) per channel.
+    Radiance(V3),
+    /// Total emitted power of the grid in watts (luminance), with the lamps' mean colour.
+    /// Held constant, the grid looks the same at 5 × 5 and 1000 × 1000.
+    Power {
+        /// Watts.
+        watts: f32,
+        /// Mean colour (its luminance is normalised away).
+        #[serde(default = "white")]
+        color: V3,
+    },
+}
+
+fn white() -> V3 {
+    [1.0, 1.0, 1.0]
+}

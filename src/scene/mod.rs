@@ -1,0 +1,87 @@
+//! The renderable scene: immutable, `Sync`, built once from a [`SceneDescription`].
+//!
+//! Owns: [`Scene`] (camera, geometry with its BVH, materials, lights, bounds, statistics),
+//! the description types and the RON format (plain data), procedural shapes, the built-in
+//! default scene, and `build` (validate, flatten instances, emissive surfaces → lights).
+//! Depends on geometry, material, light and camera; never touches files (the `io` loaders
+//! produce descriptions).
+
+mod build;
+pub mod description;
+pub mod format;
+pub mod shapes;
+
+pub use build::{BuildOptions, build};
+pub use description::SceneDescription;
+
+use std::time::Duration;
+
+use crate::camera::Camera;
+use crate::geometry::{Geometry, Ray, SurfaceHit};
+use crate::light::Light;
+use crate::material::Material;
+use crate::math::Vec3A;
+
+/// Counts, sizes and timings of a built scene.
+#[derive(Clone, Debug, Default)]
+pub struct SceneStats {
+    /// Triangles in the BVH.
+    pub triangles: usize,
+    /// Triangles that emit (one light each, or two per quad light).
+    pub emissive_triangles: usize,
+    /// Mesh instances placed.
+    pub instances: usize,
+    /// Time to build the BVH.
+    pub bvh_build_time: Duration,
+    /// Time for the whole build (validation, flattening, lights, BVH).
+    pub build_time: Duration,
+    /// Bytes of geometry and BVH.
+    pub geometry_bytes: usize,
+    /// Bytes of the light list.
+    pub light_bytes: usize,
+}
+
+/// A scene ready to render.
+pub struct Scene {
+    /// Where it came from.
+    pub source: String,
+    /// The camera in use (with the output resolution).
+    pub camera: Camera,
+    /// Name of that camera.
+    pub camera_name: String,
+    /// Triangles and the BVH.
+    pub geometry: Geometry,
+    /// Materials, indexed by the triangles.
+    pub materials: Vec<Material>,
+    /// Every light; emissive triangles point into this list.
+    pub lights: Vec<Light>,
+    /// Centre of the bounding sphere of everything.
+    pub center: Vec3A,
+    /// Radius of that sphere (sizes directional lights' power).
+    pub radius: f32,
+    /// Render settings the scene asked for.
+    pub render: description::RenderDefaults,
+    /// Counts and timings.
+    pub stats: SceneStats,
+    /// What the loader and the build skipped or approximated.
+    pub warnings: Vec<String>,
+}
+
+impl Scene {
+    /// Closest surface along `ray` within `t_max`.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
+        self.geometry.intersect(ray, t_max)
+    }
+
+    /// True when something blocks `ray` before `t_max`.
+    #[inline]
+    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        self.geometry.occluded(ray, t_max)
+    }
+
+    /// Total emitted power (luminance watts) of every light.
+    pub fn total_power(&self) -> f64 {
+        self.lights.iter().map(|l| l.power(self.radius) as f64).sum()
+    }
+}
