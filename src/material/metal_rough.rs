@@ -1,13 +1,17 @@
 //! The glTF 2.0 metallic-roughness BSDF (with KHR_materials_specular), in the local frame.
 //!
-//! Follows the glTF specification's reference model (Appendix B): a dielectric layer,
-//! `fresnel_mix(diffuse, specular)`, blended with a metal by `metallic`:
+//! Follows the glTF specification's model (Appendix B): a dielectric layer over a diffuse
+//! base, blended with a metal by `metallic`:
 //!
 //! ```text
-//! f = (1−m)·(1 − F_d(v·h))·base/π  +  F(v·h)·D(h)·G2/(4·cosθo·cosθi)
+//! f = (1−m)·(1 − F_d(cosθo))·(1 − F_d(cosθi))·base/π  +  F(v·h)·D(h)·G2/(4·cosθo·cosθi)
 //! F   = Schlick with F0 = lerp(0.04·s, base, m), F90 = lerp(s, 1, m)
 //! F_d = Schlick with F0 = 0.04·s, F90 = s          (s = specularFactor)
 //! ```
+//! Deviation: the specification's `fresnel_mix` weights the diffuse lobe by 1 − F_d(v·h),
+//! which reflects up to 14% more than it receives for a white rough plastic at grazing
+//! angles (our albedo test caught it). Weighting by the Fresnel transmission at both ends,
+//! as Ashikhmin & Shirley do, keeps the model reciprocal and its albedo at most 1.
 //! GGX with `alpha = roughness²`, height-correlated Smith G2, visible-normal sampling. With
 //! `m = 0, s = 0` both Fresnel terms vanish and the model is exactly Lambertian, which
 //! Blender's exported diffuse materials rely on. The one-sample lobe choice uses the albedo
@@ -57,6 +61,7 @@ impl MetalRough {
         f0 + (self.specular - f0) * schlick_weight(cos)
     }
 
+    /// Diffuse weight for one direction: the dielectric layer's Fresnel transmission.
     #[inline]
     fn diffuse_albedo(&self, cos: f32) -> Rgb {
         self.base * ((1.0 - self.metallic) * (1.0 - self.dielectric_fresnel(cos)))
@@ -79,7 +84,7 @@ impl MetalRough {
         let h = (wo + wi).normalize();
         let voh = wo.dot(h).max(0.0);
         let spec = self.fresnel(voh) * (self.ggx.d(h) * self.ggx.g2(wo, wi) / (4.0 * wo.z * wi.z));
-        spec + self.diffuse_albedo(voh) * FRAC_1_PI
+        spec + self.diffuse_albedo(wo.z) * ((1.0 - self.dielectric_fresnel(wi.z)) * FRAC_1_PI)
     }
 
     /// Solid-angle density of [`MetalRough::sample`].

@@ -297,8 +297,11 @@ fn default_fill() -> f32 {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub enum GridEmission {
-    /// Mean radiance of a lamp, W/(m²·sr) per channel.
-    Radiance(V3),
+    /// Mean radiance of a lamp.
+    Radiance {
+        /// W/(m²·sr) per channel.
+        rgb: V3,
+    },
     /// Total emitted power of the grid in watts (luminance), with the lamps' mean colour.
     /// Held constant, the grid looks the same at 5 × 5 and 1000 × 1000.
     Power {

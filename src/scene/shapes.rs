@@ -164,7 +164,7 @@ pub fn light_grid(name: &str, g: &GridSpec) -> Result<Vec<LightDesc>, String> {
     let sides = if g.two_sided { 2.0 } else { 1.0 };
     // The mean colour and the mean lamp luminance the result must have.
     let (color, target_lum) = match &g.emission {
-        GridEmission::Radiance(c) => (Rgb::from(*c), luminance(Rgb::from(*c))),
+        GridEmission::Radiance { rgb } => (Rgb::from(*rgb), luminance(Rgb::from(*rgb))),
         GridEmission::Power { watts, color } => {
             if !(*watts > 0.0) {
                 return Err("`Power` needs positive `watts`".into());
@@ -247,7 +247,7 @@ mod tests {
 
     #[test]
     fn grid_radiance_mean_is_exact_and_spread_spans_decades() {
-        let lights = light_grid("g", &grid(20, GridEmission::Radiance([40.0, 40.0, 40.0]))).unwrap();
+        let lights = light_grid("g", &grid(20, GridEmission::Radiance { rgb: [40.0; 3] })).unwrap();
         let lums: Vec<f32> = lights
             .iter()
             .map(|l| match l {
@@ -263,10 +263,10 @@ mod tests {
 
     #[test]
     fn bad_grids_are_explained() {
-        let mut g = grid(5, GridEmission::Radiance([1.0; 3]));
+        let mut g = grid(5, GridEmission::Radiance { rgb: [1.0; 3] });
         g.fill = 0.0;
         assert!(light_grid("g", &g).unwrap_err().contains("fill"));
-        let mut g = grid(5, GridEmission::Radiance([1.0; 3]));
+        let mut g = grid(5, GridEmission::Radiance { rgb: [1.0; 3] });
         g.normal = [0.0; 3];
         assert!(light_grid("g", &g).unwrap_err().contains("normal"));
     }

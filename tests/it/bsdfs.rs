@@ -1,0 +1,149 @@
+//! BSDF tests: eval/pdf/sample agreement, reciprocity, energy conservation, and a chi-square
+//! test of sampled directions against the pdf (Mitsuba's `chi2` recipe).
+
+use crate::common::{chi_square, sidak};
+use myriad::material::{Bsdf, Diffuse, MetalRough};
+use myriad::math::{Rgb, Vec2, Vec3A};
+use myriad::sampling::{Dim, SampleStream};
+use std::f64::consts::PI;
+
+fn bsdfs() -> Vec<(&'static str, Bsdf)> {
+    vec![
+        ("lambert", Bsdf::Diffuse(Diffuse { albedo: Rgb::new(0.8, 0.5, 0.2) })),
+        ("plastic r0.3", Bsdf::MetalRough(MetalRough::new(Rgb::new(0.8, 0.2, 0.2), 0.0, 0.3, 1.0))),
+        ("plastic r0.7", Bsdf::MetalRough(MetalRough::new(Rgb::new(0.3, 0.6, 0.9), 0.0, 0.7, 0.5))),
+        ("metal r0.3", Bsdf::MetalRough(MetalRough::new(Rgb::new(0.95, 0.64, 0.54), 1.0, 0.3, 1.0))),
+        ("half-metal r1", Bsdf::MetalRough(MetalRough::new(Rgb::ONE, 0.5, 1.0, 1.0))),
+    ]
+}
+
+fn wo_at(cos_theta: f32) -> Vec3A {
+    Vec3A::new((1.0 - cos_theta * cos_theta).sqrt(), 0.0, cos_theta)
+}
+
+fn u2(i: u64, salt: u64) -> (f32, Vec2) {
+    let s = SampleStream::new(salt, i, 0);
+    (s.get_1d(0, Dim::BsdfLobe, 0), s.get_2d(0, Dim::BsdfDirection, 0))
+}
+
+#[test]
+fn sample_weight_and_pdf_agree_with_eval() {
+    for (name, b) in bsdfs() {
+        for cos_o in [0.95f32, 0.6, 0.2] {
+            let wo = wo_at(cos_o);
+            for i in 0..4000 {
+                let (ul, u) = u2(i, 1);
+                let Some(s) = b.sample(wo, ul, u) else { continue };
+                assert!(s.wi.z > 0.0 && (s.wi.length() - 1.0).abs() < 1e-4, "{name}");
+                let pdf = b.pdf(wo, s.wi);
+                assert!((pdf - s.pdf).abs() <= 1e-4 * pdf, "{name}: pdf {} vs {pdf}", s.pdf);
+                let expect = b.eval(wo, s.wi) * s.wi.z / s.pdf;
+                assert!(
+                    (expect - s.weight).abs().max_element() <= 1e-4 * expect.max_element().max(1e-3),
+                    "{name}: weight"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn metal_rough_without_metal_or_specular_is_exactly_lambertian() {
+    let base = Rgb::new(0.73, 0.5, 0.1);
+    let a = MetalRough::new(base, 0.0, 0.4, 0.0);
+    let d = Diffuse { albedo: base };
+    for i in 0..100 {
+        let (_, u) = u2(i, 2);
+        let wi = myriad::math::warp::square_to_cosine_hemisphere(u);
+        let wo = wo_at(0.3 + 0.007 * i as f32);
+        assert_eq!(a.eval(wo, wi), d.eval(wo, wi));
+    }
+}
+
+#[test]
+fn eval_is_reciprocal() {
+    for (name, b) in bsdfs() {
+        for i in 0..200 {
+            let (_, u) = u2(i, 3);
+            let (_, v) = u2(i, 4);
+            let wi = myriad::math::warp::square_to_cosine_hemisphere(u);
+            let wo = myriad::math::warp::square_to_cosine_hemisphere(v);
+            let (a, c) = (b.eval(wo, wi), b.eval(wi, wo));
+            assert!((a - c).abs().max_element() <= 1e-4 * a.max_element().max(1e-4), "{name}: {a} vs {c}");
+        }
+    }
+}
+
+#[test]
+fn albedo_never_exceeds_one() {
+    // White versions of every lobe mix: E[weight] ≤ 1 within 4 standard errors.
+    let whites = [
+        MetalRough::new(Rgb::ONE, 1.0, 0.2, 1.0),
+        MetalRough::new(Rgb::ONE, 1.0, 1.0, 1.0),
+        MetalRough::new(Rgb::ONE, 0.0, 0.2, 1.0),
+        MetalRough::new(Rgb::ONE, 0.0, 1.0, 1.0),
+    ];
+    for b in whites {
+        for cos_o in [1.0f32, 0.7, 0.3, 0.05] {
+            let wo = wo_at(cos_o);
+            let n = 40_000;
+            let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+            for i in 0..n {
+                let (ul, u) = u2(i, 5);
+                let w = b.sample(wo, ul, u).map_or(0.0, |s| s.weight.max_element() as f64);
+                sum += w;
+                sum2 += w * w;
+            }
+            let mean = sum / n as f64;
+            let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
+            assert!(mean <= 1.0 + 4.0 * se + 1e-3, "{b:?} cos {cos_o}: albedo {mean} ± {se}");
+        }
+    }
+}
+
+/// Chi-square of sampled directions in (cos θ, φ) cells against the pdf integrated over each
+/// cell, plus one cell for failed samples (mass the pdf does not cover).
+#[test]
+fn sampled_directions_follow_the_pdf() {
+    let (nz, nphi, sub) = (16usize, 32usize, 6usize);
+    let cases: Vec<_> = bsdfs().into_iter().flat_map(|b| [0.9f32, 0.4].map(move |c| (b.0, b.1, c))).collect();
+    let alpha = sidak(cases.len());
+    for (name, b, cos_o) in cases {
+        let wo = wo_at(cos_o);
+        let n = 200_000u64;
+        let mut observed = vec![0.0f64; nz * nphi + 1];
+        for i in 0..n {
+            let (ul, u) = u2(i, 6);
+            match b.sample(wo, ul, u) {
+                Some(s) => {
+                    let z = ((s.wi.z * nz as f32) as usize).min(nz - 1);
+                    let phi = (s.wi.y.atan2(s.wi.x) as f64 + 2.0 * PI) % (2.0 * PI);
+                    let p = ((phi / (2.0 * PI) * nphi as f64) as usize).min(nphi - 1);
+                    observed[z * nphi + p] += 1.0;
+                }
+                None => observed[nz * nphi] += 1.0,
+            }
+        }
+        let mut expected = vec![0.0f64; nz * nphi + 1];
+        let (dz, dphi) = (1.0 / nz as f64, 2.0 * PI / nphi as f64);
+        for zi in 0..nz {
+            for pi in 0..nphi {
+                let mut acc = 0.0;
+                for a in 0..sub {
+                    for c in 0..sub {
+                        let z = (zi as f64 + (a as f64 + 0.5) / sub as f64) * dz;
+                        let phi = (pi as f64 + (c as f64 + 0.5) / sub as f64) * dphi;
+                        let r = (1.0 - z * z).max(0.0).sqrt();
+                        let wi = Vec3A::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
+                        acc += b.pdf(wo, wi) as f64;
+                    }
+                }
+                expected[zi * nphi + pi] = acc / (sub * sub) as f64 * dz * dphi * n as f64;
+            }
+        }
+        let covered: f64 = expected.iter().sum();
+        expected[nz * nphi] = (n as f64 - covered).max(0.0);
+        let r = chi_square(&observed, &expected);
+        assert!(r.p > alpha, "{name} cos_o {cos_o}: {r:?} (covered {:.4})", covered / n as f64);
+    }
+}

@@ -1,0 +1,160 @@
+//! The `myriad` binary as users run it: bad input gives a clear error and a non-zero exit,
+//! never a panic or a half-written file; good input gives EXR + PNG with provenance.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn myriad(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_myriad")).args(args).current_dir(dir).output().expect("myriad runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+const GOOD: &str = r#"Scene(
+    camera: Perspective(eye: (0, 1, 3), look_at: (0, 1, 0), yfov_deg: 40),
+    film: (resolution: (16, 12)),
+    materials: { "white": Diffuse(albedo: (0.7, 0.7, 0.7)) },
+    objects: [ Quad(corner: (-1, 0, 1), edge1: (2, 0, 0), edge2: (0, 0, -2), material: "white") ],
+    lights: [ Quad(corner: (-0.2, 1.9, -0.2), edge1: (0.4, 0, 0), edge2: (0, 0, 0.4), radiance: (5, 5, 5)) ],
+)"#;
+
+/// Writes `text` as a scene in a fresh directory; returns (dir guard, scene path).
+fn scene_file(text: &str) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.ron");
+    std::fs::write(&path, text).unwrap();
+    (dir, path)
+}
+
+/// Runs `render` on `text` and expects failure mentioning every string in `needles`; checks
+/// that no output (or temporary) file appeared.
+fn expect_error(text: &str, needles: &[&str]) {
+    let (dir, _) = scene_file(text);
+    let out = myriad(&["render", "scene.ron", "-o", "out.exr", "--spp", "1"], dir.path());
+    let err = stderr(&out);
+    assert!(!out.status.success(), "expected failure, got success: {err}");
+    assert!(!err.contains("panicked"), "panic: {err}");
+    for n in needles {
+        assert!(err.contains(n), "error message lacks '{n}':\n{err}");
+    }
+    let files: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(files, vec![std::ffi::OsString::from("scene.ron")], "files left behind");
+}
+
+#[test]
+fn typo_names_line_column_and_the_expected_fields() {
+    expect_error(&GOOD.replace("yfov_deg", "yfov_dg"), &["scene.ron", "2:", "yfov_dg", "yfov_deg", "^"]);
+}
+
+#[test]
+fn unknown_material_lists_the_defined_ones() {
+    expect_error(&GOOD.replace("material: \"white\"", "material: \"whte\""), &["objects[0] Quad", "whte", "white"]);
+}
+
+#[test]
+fn missing_mesh_file_names_it() {
+    let text = GOOD.replace("objects: [", "objects: [ Mesh(path: \"assets/missing.obj\"),");
+    expect_error(&text, &["objects[0] Mesh", "missing.obj", "No such file"]);
+}
+
+#[test]
+fn nan_coordinates_are_rejected() {
+    expect_error(&GOOD.replace("corner: (-1, 0, 1)", "corner: (NaN, 0, 1)"), &["objects[0] Quad", "non-finite"]);
+}
+
+#[test]
+fn zero_area_light_is_rejected() {
+    expect_error(&GOOD.replace("edge2: (0, 0, 0.4)", "edge2: (0.8, 0, 0)"), &["lights[0] Quad", "zero area"]);
+}
+
+#[test]
+fn negative_radiance_is_rejected() {
+    expect_error(&GOOD.replace("radiance: (5, 5, 5)", "radiance: (5, -1, 5)"), &["lights[0] Quad", "negative"]);
+}
+
+#[test]
+fn bad_grid_is_explained() {
+    let text = GOOD.replace(
+        "lights: [",
+        "lights: [ Grid(center: (0, 1.9, 0), normal: (0, -1, 0), extent: (1, 1), rows: 0, cols: 4, emission: Radiance(rgb: (1, 1, 1))),",
+    );
+    expect_error(&text, &["lights[0] Grid", "rows"]);
+}
+
+#[test]
+fn unwritable_output_fails_before_rendering_and_keeps_old_files() {
+    let (dir, _) = scene_file(GOOD);
+    let out = myriad(&["render", "scene.ron", "-o", "no/such/dir/out.exr", "--spp", "100000"], dir.path());
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("no/such/dir/out.exr"), "{}", stderr(&out));
+    // An existing output survives a failed render untouched.
+    std::fs::write(dir.path().join("keep.exr"), b"previous render").unwrap();
+    let bad = GOOD.replace("radiance: (5, 5, 5)", "radiance: (5, -1, 5)");
+    std::fs::write(dir.path().join("scene.ron"), bad).unwrap();
+    let out = myriad(&["render", "scene.ron", "-o", "keep.exr"], dir.path());
+    assert!(!out.status.success());
+    assert_eq!(std::fs::read(dir.path().join("keep.exr")).unwrap(), b"previous render");
+}
+
+#[test]
+fn unknown_sampler_suggests_the_names() {
+    let (dir, _) = scene_file(GOOD);
+    let out = myriad(&["render", "scene.ron", "--sampler", "powr"], dir.path());
+    assert!(!out.status.success());
+    let err = stderr(&out);
+    assert!(err.contains("power") && err.contains("uniform"), "{err}");
+}
+
+#[test]
+fn render_writes_exr_with_provenance_and_png_and_nothing_else() {
+    let (dir, _) = scene_file(GOOD);
+    let out = myriad(
+        &["render", "scene.ron", "-o", "img.exr", "--spp", "4", "--seed", "3", "--aov", "albedo,normal,depth,variance"],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let summary = String::from_utf8_lossy(&out.stdout);
+    for key in ["samples/s", "rays/s", "lights", "triangles", "BVH"] {
+        assert!(summary.contains(key), "summary lacks {key}: {summary}");
+    }
+    let (layers, meta) = myriad::io::exr::read(&dir.path().join("img.exr")).unwrap();
+    for c in ["R", "G", "B", "albedo.R", "N.X", "Z", "variance.G"] {
+        assert!(layers.channel(c).is_some(), "missing channel {c}");
+    }
+    let get = |k: &str| meta.iter().find(|(a, _)| a == k).map(|(_, v)| v.clone());
+    assert_eq!(get("myriad.sampler").as_deref(), Some("power"));
+    assert_eq!(get("myriad.spp").as_deref(), Some("4"));
+    assert_eq!(get("myriad.seed").as_deref(), Some("3"));
+    assert_eq!(get("myriad.max_depth").as_deref(), Some("8"));
+    assert!(get("myriad.render_seconds").is_some() && get("myriad.version").is_some());
+    let mut files: Vec<String> =
+        std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    files.sort();
+    assert_eq!(files, ["img.exr", "img.png", "scene.ron"]);
+}
+
+#[test]
+fn default_scene_renders_without_arguments_and_threads_do_not_change_pixels() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = |t: &'static str, o: &'static str| {
+        ["--threads", t, "render", "-o", o, "--resolution", "20x15", "--spp", "3", "--no-png"]
+    };
+    assert!(myriad(&args("1", "a.exr"), dir.path()).status.success());
+    assert!(myriad(&args("2", "b.exr"), dir.path()).status.success());
+    let (a, _) = myriad::io::exr::read(&dir.path().join("a.exr")).unwrap();
+    let (b, _) = myriad::io::exr::read(&dir.path().join("b.exr")).unwrap();
+    assert_eq!(a, b);
+    assert!(a.channel("R").unwrap().data.iter().any(|v| *v > 0.0));
+}
+
+#[test]
+fn info_reports_counts() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-9x9.ron");
+    let out = myriad(&["info", scene.to_str().unwrap()], Path::new("."));
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("81 (81 quad)"), "{text}");
+    assert!(text.contains("B/triangle"), "{text}");
+}

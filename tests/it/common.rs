@@ -1,0 +1,289 @@
+//! Shared test machinery: statistics (chi-square with pooling and Šidák correction, z-tests),
+//! analytic answers (Lambert's polygon formula) and scene builders.
+
+use myriad::light::LightId;
+use myriad::light_sampler::{LightSampler, ShadingContext};
+use myriad::material::Material;
+use myriad::math::{Mat4, Rgb, UVec2, Vec3A};
+use myriad::scene::description::{CameraDesc, CameraPlacement, InstanceDesc, LightDesc, MeshDesc, SceneDescription};
+use myriad::scene::{BuildOptions, Scene, build};
+use std::sync::Arc;
+
+/// Significance level of every statistical test, before correction.
+pub const ALPHA: f64 = 0.01;
+
+/// ln Γ(x), Lanczos approximation (g = 7, n = 9), accurate to ~1e-15 for x > 0.
+pub fn ln_gamma(x: f64) -> f64 {
+    const C: [f64; 9] = [
+        0.999_999_999_999_809_9,
+        676.520_368_121_885_1,
+        -1_259.139_216_722_402_8,
+        771.323_428_777_653_1,
+        -176.615_029_162_140_6,
+        12.507_343_278_686_905,
+        -0.138_571_095_265_720_12,
+        9.984_369_578_019_572e-6,
+        1.505_632_735_149_311_6e-7,
+    ];
+    if x < 0.5 {
+        return (std::f64::consts::PI / (std::f64::consts::PI * x).sin()).ln() - ln_gamma(1.0 - x);
+    }
+    let x = x - 1.0;
+    let t = x + 7.5;
+    let s: f64 = C[0] + (1..9).map(|i| C[i] / (x + i as f64)).sum::<f64>();
+    0.5 * (2.0 * std::f64::consts::PI).ln() + (x + 0.5) * t.ln() - t + s.ln()
+}
+
+/// Regularised upper incomplete gamma Q(a, x) (series below a+1, continued fraction above).
+pub fn gamma_q(a: f64, x: f64) -> f64 {
+    if x <= 0.0 {
+        return 1.0;
+    }
+    if x < a + 1.0 {
+        let (mut sum, mut term, mut n) = (1.0 / a, 1.0 / a, a);
+        for _ in 0..10_000 {
+            n += 1.0;
+            term *= x / n;
+            sum += term;
+            if term.abs() < sum.abs() * 1e-15 {
+                break;
+            }
+        }
+        1.0 - sum * (-x + a * x.ln() - ln_gamma(a)).exp()
+    } else {
+        let tiny = 1e-300;
+        let mut b = x + 1.0 - a;
+        let mut c = 1.0 / tiny;
+        let mut d = 1.0 / b;
+        let mut h = d;
+        for i in 1..10_000 {
+            let an = -(i as f64) * (i as f64 - a);
+            b += 2.0;
+            d = an * d + b;
+            if d.abs() < tiny {
+                d = tiny;
+            }
+            c = b + an / c;
+            if c.abs() < tiny {
+                c = tiny;
+            }
+            d = 1.0 / d;
+            let delta = d * c;
+            h *= delta;
+            if (delta - 1.0).abs() < 1e-15 {
+                break;
+            }
+        }
+        (-x + a * x.ln() - ln_gamma(a)).exp() * h
+    }
+}
+
+/// Result of a chi-square goodness-of-fit test.
+#[derive(Debug)]
+pub struct ChiSquare {
+    /// The statistic.
+    pub chi2: f64,
+    /// Degrees of freedom after pooling.
+    pub dof: usize,
+    /// P-value.
+    pub p: f64,
+}
+
+/// Pearson's chi-square of `observed` counts against `expected` counts (same total). Cells
+/// expected below 5 are pooled (Mitsuba's `chi2.py`); an observation in a cell with expectation
+/// 0 is an immediate failure (returns p = 0).
+pub fn chi_square(observed: &[f64], expected: &[f64]) -> ChiSquare {
+    let mut idx: Vec<usize> = (0..observed.len()).collect();
+    idx.sort_by(|&a, &b| expected[a].partial_cmp(&expected[b]).unwrap());
+    let (mut chi2, mut dof) = (0.0, 0usize);
+    let (mut pool_o, mut pool_e) = (0.0, 0.0);
+    for &i in &idx {
+        if expected[i] == 0.0 {
+            if observed[i] > 0.0 {
+                return ChiSquare { chi2: f64::INFINITY, dof: 0, p: 0.0 };
+            }
+            continue;
+        }
+        if expected[i] < 5.0 || pool_e > 0.0 && pool_e < 5.0 {
+            pool_o += observed[i];
+            pool_e += expected[i];
+            if pool_e >= 5.0 {
+                chi2 += (pool_o - pool_e).powi(2) / pool_e;
+                dof += 1;
+                pool_o = 0.0;
+                pool_e = 0.0;
+            }
+            continue;
+        }
+        chi2 += (observed[i] - expected[i]).powi(2) / expected[i];
+        dof += 1;
+    }
+    if pool_e > 0.0 {
+        chi2 += (pool_o - pool_e).powi(2) / pool_e;
+        dof += 1;
+    }
+    let dof = dof.saturating_sub(1).max(1);
+    ChiSquare { chi2, dof, p: gamma_q(dof as f64 / 2.0, chi2 / 2.0) }
+}
+
+/// Per-test significance with a Šidák correction over `tests` tests.
+pub fn sidak(tests: usize) -> f64 {
+    1.0 - (1.0 - ALPHA).powf(1.0 / tests as f64)
+}
+
+/// Two-sided p-value of a standard-normal z.
+pub fn z_p_value(z: f64) -> f64 {
+    // P(|Z| > z) = Q(1/2, z²/2).
+    gamma_q(0.5, z * z / 2.0)
+}
+
+/// Running mean and variance (Welford) of a scalar estimator.
+#[derive(Default, Clone, Copy, Debug)]
+pub struct Stats {
+    n: f64,
+    mean: f64,
+    m2: f64,
+}
+
+impl Stats {
+    /// Adds a sample.
+    pub fn add(&mut self, x: f64) {
+        self.n += 1.0;
+        let d = x - self.mean;
+        self.mean += d / self.n;
+        self.m2 += d * (x - self.mean);
+    }
+    /// Mean.
+    pub fn mean(&self) -> f64 {
+        self.mean
+    }
+    /// Standard error of the mean.
+    pub fn std_error(&self) -> f64 {
+        (self.m2 / (self.n - 1.0) / self.n).sqrt()
+    }
+}
+
+/// Irradiance at `p` (normal `n`) from a uniform Lambertian polygon of radiance `l`, corners
+/// counter-clockwise seen from its emitting side: Lambert's formula
+/// E = L/2 · Σ Θ_k (n · unit(v_k × v_{k+1})), v_k = q_k − p.
+pub fn polygon_irradiance(p: Vec3A, n: Vec3A, corners: &[Vec3A], l: f64) -> f64 {
+    let k = corners.len();
+    let mut sum = 0.0f64;
+    for i in 0..k {
+        let a = (corners[i] - p).normalize();
+        let b = (corners[(i + 1) % k] - p).normalize();
+        let theta = (a.dot(b) as f64).clamp(-1.0, 1.0).acos();
+        let c = a.cross(b).normalize();
+        sum += theta * c.dot(n) as f64;
+    }
+    // With corners counter-clockwise seen from the receiver side the sum is negative.
+    (0.5 * l * sum).abs()
+}
+
+/// A scene from parts: the camera looks from `eye` to `target` at `resolution`.
+pub fn scene_from(
+    materials: Vec<Material>,
+    meshes: Vec<(MeshDesc, Mat4)>,
+    lights: Vec<LightDesc>,
+    eye: Vec3A,
+    target: Vec3A,
+    resolution: UVec2,
+) -> Scene {
+    let mut desc = SceneDescription { source: "<test>".into(), materials, lights, ..Default::default() };
+    desc.cameras.push(CameraDesc {
+        name: "test".into(),
+        placement: CameraPlacement::LookAt {
+            eye,
+            target,
+            up: if (target - eye).normalize().y.abs() > 0.99 { Vec3A::Z } else { Vec3A::Y },
+        },
+        yfov: 0.8,
+        aspect_ratio: None,
+    });
+    for (i, (mesh, m)) in meshes.into_iter().enumerate() {
+        desc.meshes.push(mesh);
+        desc.instances.push(InstanceDesc { mesh: i as u32, transform: m, name: format!("mesh {i}") });
+    }
+    build(desc, &BuildOptions { resolution: Some(resolution), camera: None }).expect("test scene builds")
+}
+
+/// A quad light from corner and edges.
+pub fn quad_light(corner: Vec3A, e1: Vec3A, e2: Vec3A, radiance: Rgb, two_sided: bool) -> LightDesc {
+    LightDesc::Quad { name: Arc::from("test quad"), corner, edge1: e1, edge2: e2, radiance, two_sided }
+}
+
+/// Checks the sampler contract at `ctx` over `n` lights: Σ pmf within [1 − tol, 1 + tol]
+/// (or ≤ 1 when `sample` may return None), sample/pmf agreement, and a pooled chi-square of
+/// `draws` stratified picks against the pmf. Returns the chi-square p-value.
+pub fn check_sampler_at(sampler: &impl LightSampler, ctx: &ShadingContext, n: usize, draws: usize) -> f64 {
+    let pmfs: Vec<f64> = (0..n).map(|i| sampler.pmf(ctx, LightId(i as u32)) as f64).collect();
+    let total: f64 = pmfs.iter().sum();
+    assert!(total <= 1.0 + 1e-4, "pmf sums to {total} > 1 at {ctx:?}");
+    let mut counts = vec![0.0f64; n];
+    let mut none = 0usize;
+    for k in 0..draws {
+        let u = (k as f32 + 0.5) / draws as f32;
+        match sampler.sample(ctx, u) {
+            Some(s) => {
+                let p = pmfs[s.light.0 as usize] as f32;
+                assert!(s.pmf > 0.0, "sampled a light with pmf 0");
+                assert!(
+                    (s.pmf - p).abs() <= 1e-4 * p.max(1e-30),
+                    "sample pmf {} vs pmf() {p} for light {}",
+                    s.pmf,
+                    s.light.0
+                );
+                counts[s.light.0 as usize] += 1.0;
+            }
+            None => none += 1,
+        }
+    }
+    let none_rate = none as f64 / draws as f64;
+    assert!(
+        (1.0 - total - none_rate).abs() < 1e-3 + 5.0 / (draws as f64).sqrt(),
+        "Σpmf {total} but None rate {none_rate}"
+    );
+    let expected: Vec<f64> = pmfs.iter().map(|p| p * draws as f64).collect();
+    chi_square(&counts, &expected).p
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gamma_q_matches_known_chi_square_quantiles() {
+        // P(χ²_1 > 3.841) = 0.05, P(χ²_10 > 23.209) = 0.01, P(χ²_100 > 124.342) = 0.05.
+        assert!((gamma_q(0.5, 3.841 / 2.0) - 0.05).abs() < 1e-3);
+        assert!((gamma_q(5.0, 23.209 / 2.0) - 0.01).abs() < 1e-4);
+        assert!((gamma_q(50.0, 124.342 / 2.0) - 0.05).abs() < 1e-3);
+        assert!((z_p_value(1.96) - 0.05).abs() < 1e-3);
+    }
+
+    #[test]
+    fn chi_square_accepts_a_fair_die_and_rejects_a_loaded_one() {
+        let fair = chi_square(&[101.0, 95.0, 104.0, 99.0, 97.0, 104.0], &[100.0; 6]);
+        assert!(fair.p > 0.5, "{fair:?}");
+        let loaded = chi_square(&[150.0, 70.0, 100.0, 80.0, 100.0, 100.0], &[100.0; 6]);
+        assert!(loaded.p < 1e-6, "{loaded:?}");
+        assert_eq!(chi_square(&[1.0, 9.0], &[0.0, 10.0]).p, 0.0);
+    }
+
+    #[test]
+    fn polygon_formula_matches_a_disk_like_square_on_axis() {
+        // Under a small square of area A at height h, E ≈ L·A/h².
+        let h = 10.0;
+        let s = 0.1;
+        let c = [
+            Vec3A::new(-s / 2.0, h, -s / 2.0),
+            Vec3A::new(s / 2.0, h, -s / 2.0),
+            Vec3A::new(s / 2.0, h, s / 2.0),
+            Vec3A::new(-s / 2.0, h, s / 2.0),
+        ];
+        let e = polygon_irradiance(Vec3A::ZERO, Vec3A::Y, &c, 1.0);
+        assert!((e / (s as f64 * s as f64 / (h as f64 * h as f64)) - 1.0).abs() < 1e-3, "{e}");
+        // A huge square fills the hemisphere: E → π·L.
+        let big = c.map(|v| Vec3A::new(v.x * 1e5, 1.0, v.z * 1e5));
+        assert!((polygon_irradiance(Vec3A::ZERO, Vec3A::Y, &big, 1.0) - std::f64::consts::PI).abs() < 1e-3);
+    }
+}

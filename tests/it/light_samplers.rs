@@ -1,0 +1,196 @@
+//! Light-sampler contract tests, generic over `LightSampler`: pmf normalisation, sample/pmf
+//! agreement, chi-square of picks, per-light unbiasedness, and the one-sample estimator
+//! against the exact sum over point lights (exact variance known, so a z-test needs no
+//! reference noise).
+
+use crate::common::{Stats, check_sampler_at, sidak, z_p_value};
+use myriad::light::{AreaEmission, DistantLight, Light, LightId, PointLight, QuadLight, SpotLight, TriangleLight};
+use myriad::light_sampler::{LightSampler, LightSamplerKind, LightStrategy, ShadingContext};
+use myriad::math::{Rgb, Vec3A};
+use myriad::sampling::{Dim, SampleStream};
+
+/// Uniform number for test case `i`, stream `salt`.
+pub fn rnd(i: u64, salt: u64) -> f32 {
+    SampleStream::new(salt, i, 0).get_1d(0, Dim::LightSelect, 0)
+}
+
+/// A mixed light set with powers over 3 decades: quads and triangles facing various ways,
+/// points, spots and a sun.
+pub fn mixed_lights(n: usize) -> Vec<Light> {
+    (0..n)
+        .map(|i| {
+            let i64_ = i as u64;
+            let p = Vec3A::new(rnd(i64_, 1) * 8.0 - 4.0, rnd(i64_, 2) * 4.0, rnd(i64_, 3) * 8.0 - 4.0);
+            let power = 10f32.powf(3.0 * rnd(i64_, 4));
+            let dir = Vec3A::new(rnd(i64_, 5) - 0.5, rnd(i64_, 6) - 0.5, rnd(i64_, 7) - 0.5).normalize();
+            let emission = AreaEmission { radiance: Rgb::new(1.0, 0.8, 0.6) * power, two_sided: i % 7 == 0 };
+            match i % 6 {
+                0 | 1 => {
+                    let t = dir.any_orthonormal_vector() * 0.2;
+                    let b = dir.cross(t);
+                    Light::Quad(QuadLight::new(p, t, b, emission).unwrap())
+                }
+                2 => Light::Triangle(
+                    TriangleLight::new([p, p + Vec3A::X * 0.3, p + Vec3A::Z * 0.2 + dir * 0.1], emission).unwrap(),
+                ),
+                3 => Light::Point(PointLight { position: p, intensity: Rgb::splat(power) }),
+                4 => Light::Spot(SpotLight {
+                    position: p,
+                    direction: dir,
+                    intensity: Rgb::splat(power),
+                    cos_inner: 0.9,
+                    cos_outer: 0.7,
+                }),
+                _ if i == 5 => Light::Distant(DistantLight {
+                    direction: Vec3A::new(0.3, -1.0, 0.2).normalize(),
+                    irradiance: Rgb::splat(2.0),
+                }),
+                _ => Light::Point(PointLight { position: p, intensity: Rgb::new(power, 0.0, 0.0) }),
+            }
+        })
+        .collect()
+}
+
+/// Random shading contexts inside the lights' box, some with no normal (volume-like).
+pub fn contexts(n: usize) -> Vec<ShadingContext> {
+    (0..n as u64)
+        .map(|i| {
+            let p = Vec3A::new(rnd(i, 11) * 10.0 - 5.0, rnd(i, 12) * 5.0 - 0.5, rnd(i, 13) * 10.0 - 5.0);
+            let n = if i % 5 == 0 {
+                Vec3A::ZERO
+            } else {
+                Vec3A::new(rnd(i, 14) - 0.5, rnd(i, 15) - 0.3, rnd(i, 16) - 0.5).normalize()
+            };
+            ShadingContext { p, n }
+        })
+        .collect()
+}
+
+fn one_light_sampler(kind: LightSamplerKind, lights: &[Light]) -> myriad::light_sampler::AnyLightSampler {
+    match LightStrategy::build(kind, lights, 10.0) {
+        LightStrategy::One(s) => s,
+        LightStrategy::All => panic!("{kind} is a one-light sampler"),
+    }
+}
+
+/// The one-light samplers under test.
+pub const SAMPLERS: [LightSamplerKind; 2] = [LightSamplerKind::Uniform, LightSamplerKind::Power];
+
+#[test]
+fn pmf_sums_to_one_and_picks_follow_it() {
+    let lights = mixed_lights(200);
+    let ctxs = contexts(12);
+    let alpha = sidak(SAMPLERS.len() * ctxs.len());
+    for kind in SAMPLERS {
+        let s = one_light_sampler(kind, &lights);
+        for ctx in &ctxs {
+            let total: f32 = (0..lights.len()).map(|i| s.pmf(ctx, LightId(i as u32))).sum();
+            assert!((total - 1.0).abs() < 1e-4, "{kind}: Σ pmf = {total}");
+            let p = check_sampler_at(&s, ctx, lights.len(), 50_000);
+            assert!(p > alpha, "{kind} at {ctx:?}: chi-square p = {p}");
+        }
+    }
+}
+
+#[test]
+fn power_sampler_is_proportional_to_power() {
+    let lights = mixed_lights(50);
+    let s = one_light_sampler(LightSamplerKind::Power, &lights);
+    let ctx = ShadingContext { p: Vec3A::ZERO, n: Vec3A::Y };
+    let total: f64 = lights.iter().map(|l| l.power(10.0) as f64).sum();
+    for (i, l) in lights.iter().enumerate() {
+        let expect = l.power(10.0) as f64 / total;
+        let got = s.pmf(&ctx, LightId(i as u32)) as f64;
+        assert!((got - expect).abs() <= 1e-5 * expect.max(1e-3), "light {i}: {got} vs {expect}");
+    }
+}
+
+/// Σ_k 1{I_k = i} / (pmf_i · N) → 1 for every light with pmf > 0.
+pub fn check_per_light_weights(sampler: &impl LightSampler, n_lights: usize, ctx: &ShadingContext) {
+    let n = 400_000;
+    let mut acc = vec![0.0f64; n_lights];
+    for k in 0..n {
+        if let Some(s) = sampler.sample(ctx, (k as f32 + 0.5) / n as f32) {
+            acc[s.light.0 as usize] += 1.0 / s.pmf as f64;
+        }
+    }
+    for (i, a) in acc.iter().enumerate() {
+        let pmf = sampler.pmf(ctx, LightId(i as u32)) as f64;
+        if pmf * n as f64 >= 200.0 {
+            // Stratified draws: the count is within ±1 of N·pmf.
+            let w = a / n as f64;
+            assert!((w - 1.0).abs() < 2.0 / (pmf * n as f64) + 1e-3, "light {i}: weight {w} (pmf {pmf})");
+        }
+    }
+}
+
+#[test]
+fn per_light_weights_average_to_one() {
+    let lights = mixed_lights(100);
+    for kind in SAMPLERS {
+        let s = one_light_sampler(kind, &lights);
+        for ctx in contexts(3) {
+            check_per_light_weights(&s, lights.len(), &ctx);
+        }
+    }
+}
+
+/// Irradiance-like contribution c_i = I·cos/d² of point light `l` at `ctx` (no occlusion).
+fn point_contribution(l: &Light, ctx: &ShadingContext) -> f64 {
+    let ls =
+        l.sample_li(ctx.p, Default::default()).map_or(0.0, |s| s.radiance.x as f64 * (s.wi.dot(ctx.n).max(0.0)) as f64);
+    ls
+}
+
+/// The one-sample estimator c_I/p_I against Σ c_i, with its exact variance
+/// Σ c_i²/p_i − (Σ c_i)²: a z-test with no noise in the reference.
+pub fn check_estimator_against_sum(sampler: &impl LightSampler, lights: &[Light], ctx: &ShadingContext, alpha: f64) {
+    let c: Vec<f64> = lights.iter().map(|l| point_contribution(l, ctx)).collect();
+    let total: f64 = c.iter().sum();
+    let var: f64 = c
+        .iter()
+        .enumerate()
+        .map(|(i, ci)| {
+            let p = sampler.pmf(ctx, LightId(i as u32)) as f64;
+            assert!(*ci == 0.0 || p > 0.0, "light {i} contributes {ci} but has pmf 0");
+            if p > 0.0 { ci * ci / p } else { 0.0 }
+        })
+        .sum::<f64>()
+        - total * total;
+    let n = 20_000u64;
+    let mut stats = Stats::default();
+    for k in 0..n {
+        let u = rnd(k, 99);
+        let x = sampler.sample(ctx, u).map_or(0.0, |s| c[s.light.0 as usize] / s.pmf as f64);
+        stats.add(x);
+    }
+    let se = (var.max(0.0) / n as f64).sqrt();
+    let z = (stats.mean() - total) / se.max(1e-12 * total.max(1e-30));
+    assert!(
+        z_p_value(z) > alpha || (stats.mean() - total).abs() <= 1e-6 * total,
+        "mean {} vs exact {total} (z = {z})",
+        stats.mean()
+    );
+}
+
+#[test]
+fn one_sample_estimator_matches_the_sum_over_point_lights() {
+    let lights: Vec<Light> = (0..300u64)
+        .map(|i| {
+            Light::Point(PointLight {
+                position: Vec3A::new(rnd(i, 21) * 20.0 - 10.0, 0.5 + rnd(i, 22) * 3.0, rnd(i, 23) * 20.0 - 10.0),
+                intensity: Rgb::splat(10f32.powf(4.0 * rnd(i, 24))),
+            })
+        })
+        .collect();
+    let ctxs: Vec<ShadingContext> = (0..6u64)
+        .map(|i| ShadingContext { p: Vec3A::new(rnd(i, 31) * 16.0 - 8.0, 0.0, rnd(i, 32) * 16.0 - 8.0), n: Vec3A::Y })
+        .collect();
+    let alpha = sidak(SAMPLERS.len() * ctxs.len());
+    for kind in SAMPLERS {
+        let s = one_light_sampler(kind, &lights);
+        for ctx in &ctxs {
+            check_estimator_against_sum(&s, &lights, ctx, alpha);
+        }
+    }
+}

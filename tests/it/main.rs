@@ -1,0 +1,8 @@
+//! Integration tests, in one binary to keep linking cheap on 2-core CI.
+
+mod bsdfs;
+mod cli;
+mod common;
+mod light_samplers;
+mod render;
+mod scene_loading;

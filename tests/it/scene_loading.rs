@@ -1,0 +1,124 @@
+//! Scene loading: RON features, OBJ meshes, validation messages, and scale.
+
+use myriad::commands::load_scene;
+use myriad::io::ron::parse;
+use myriad::light::Light;
+use myriad::math::{UVec2, Vec3A};
+use myriad::scene::{BuildOptions, build};
+use std::path::Path;
+use std::time::Instant;
+
+const HEAD: &str = r#"Scene(
+    camera: Perspective(eye: (0, 1, 3), look_at: (0, 1, 0), yfov_deg: 40),
+    materials: { "white": Diffuse(albedo: (0.7, 0.7, 0.7)), "lamp": Emissive(radiance: (3, 3, 3)) },
+"#;
+
+fn scene(body: &str) -> String {
+    format!("{HEAD}{body}\n)")
+}
+
+fn built(text: &str, dir: &Path) -> myriad::Result<myriad::scene::Scene> {
+    build(parse(text, "test.ron", dir)?, &BuildOptions { resolution: Some(UVec2::new(8, 6)), camera: None })
+}
+
+#[test]
+fn a_million_lamp_grid_loads() {
+    let text = scene(
+        "lights: [ Grid(center: (0, 2, 0), normal: (0, -1, 0), extent: (2, 2), rows: 1000, cols: 1000, \
+         emission: Power(watts: 50), color_jitter: 0.1, decades: 2, seed: 4) ],",
+    );
+    let t = Instant::now();
+    let s = built(&text, Path::new(".")).unwrap();
+    eprintln!("1000 × 1000 grid: load + build {:.2} s", t.elapsed().as_secs_f64());
+    assert_eq!(s.lights.len(), 1_000_000);
+    assert_eq!(s.stats.triangles, 2_000_000);
+    assert!((s.total_power() - 50.0).abs() < 50.0 * 1e-3, "{}", s.total_power());
+}
+
+#[test]
+fn emissive_objects_become_quad_lights_and_boxes_six() {
+    let text = scene(
+        r#"objects: [
+            Quad(corner: (0, 2, 0), edge1: (1, 0, 0), edge2: (0, 0, 1), material: "lamp"),
+            Box(size: (1, 1, 1), transform: (translate: (0, 0.5, 0), rotate_deg: (0, 30, 0)), material: "lamp"),
+            Sphere(center: (2, 1, 0), radius: 0.5, subdivisions: 1, material: "white"),
+        ],"#,
+    );
+    let s = built(&text, Path::new(".")).unwrap();
+    assert_eq!(s.lights.len(), 7);
+    assert!(s.lights.iter().all(|l| matches!(l, Light::Quad(_))));
+    assert_eq!(s.stats.triangles, 2 + 12 + 80);
+    // The box's faces point outwards after the rotation.
+    for l in &s.lights[1..] {
+        let Light::Quad(q) = l else { unreachable!() };
+        let c = q.p0 + 0.5 * (q.e1 + q.e2);
+        assert!(q.n.dot(c - Vec3A::new(0.0, 0.5, 0.0)) > 0.0);
+    }
+}
+
+#[test]
+fn obj_meshes_load_with_transform_and_materials() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("tri.obj"),
+        "mtllib tri.mtl\no lamp\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nusemtl glow\nf 1 2 4 3\n",
+    )
+    .unwrap();
+    std::fs::write(dir.path().join("tri.mtl"), "newmtl glow\nKd 0 0 0\nKe 2 1 0.5\n").unwrap();
+    let text = scene(r#"objects: [ Mesh(path: "tri.obj", transform: (translate: (0, 0, -1), scale: (2, 2, 2))) ],"#);
+    let s = built(&text, dir.path()).unwrap();
+    assert_eq!(s.stats.triangles, 2);
+    assert_eq!(s.lights.len(), 2, "a polygon with Ke becomes emissive triangles");
+    let Light::Triangle(t) = &s.lights[0] else { panic!() };
+    assert!((t.area - 2.0).abs() < 1e-5, "scaled by 2: {}", t.area);
+    assert!(t.v.iter().all(|v| v.z == -1.0));
+    assert_eq!(t.emission.radiance, myriad::math::Rgb::new(2.0, 1.0, 0.5));
+
+    // Without its .mtl the mesh loads grey, with a warning that says so.
+    std::fs::remove_file(dir.path().join("tri.mtl")).unwrap();
+    let s = built(&text, dir.path()).unwrap();
+    assert!(s.lights.is_empty());
+    assert!(s.warnings.iter().any(|w| w.contains("material library")), "{:?}", s.warnings);
+}
+
+#[test]
+fn mirrored_emitters_keep_their_front_side() {
+    // glTF's rule: a negative-determinant transform reverses the winding, so the front face
+    // of a mirrored one-sided emitter is the mirror image of the original front face.
+    let text = scene(r#"objects: [ Box(size: (1, 1, 1), transform: (scale: (-1, 1, 1)), material: "lamp") ],"#);
+    let s = built(&text, Path::new(".")).unwrap();
+    for l in &s.lights {
+        let Light::Quad(q) = l else { unreachable!() };
+        let c = q.p0 + 0.5 * (q.e1 + q.e2);
+        assert!(q.n.dot(c) > 0.0, "mirrored box face points inwards");
+    }
+}
+
+#[test]
+fn missing_fields_and_bad_values_are_located() {
+    let e = parse(
+        &scene("objects: [ Quad(corner: (0, 0, 0), edge1: (1, 0, 0), material: \"white\") ],"),
+        "x.ron",
+        Path::new("."),
+    )
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(e.contains("x.ron") && e.contains("edge2"), "{e}");
+    let bad_camera = HEAD.replace("look_at: (0, 1, 0)", "look_at: (0, 1, 3)") + ")";
+    let e = built(&bad_camera, Path::new(".")).err().unwrap().to_string();
+    assert!(e.contains("degenerate"), "{e}");
+    let e = built(&scene("film: (resolution: (0, 10)),"), Path::new(".")).err().unwrap().to_string();
+    assert!(e.contains("resolution"), "{e}");
+}
+
+#[test]
+fn shipped_scenes_load() {
+    for name in ["cornell-5x5.ron", "cornell-9x9.ron", "cornell-32x32.ron", "cornell-320x320.ron"] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
+        let s = load_scene(Some(&path), &BuildOptions::default()).unwrap().scene;
+        let n: usize = name.trim_start_matches("cornell-").split('x').next().unwrap().parse().unwrap();
+        assert_eq!(s.lights.len(), n * n, "{name}");
+        assert!((s.total_power() - 45.24).abs() < 0.01, "{name}: {}", s.total_power());
+    }
+}
