@@ -78,8 +78,9 @@ pub fn gamma_q(a: f64, x: f64) -> f64 {
     }
 }
 
-/// Result of a chi-square goodness-of-fit test.
+/// Result of a chi-square goodness-of-fit test (all fields appear in failure messages).
 #[derive(Debug)]
+#[allow(dead_code)]
 pub struct ChiSquare {
     /// The statistic.
     pub chi2: f64,
@@ -137,12 +138,11 @@ pub fn z_p_value(z: f64) -> f64 {
     gamma_q(0.5, z * z / 2.0)
 }
 
-/// Running mean and variance (Welford) of a scalar estimator.
+/// Running mean of a scalar estimator.
 #[derive(Default, Clone, Copy, Debug)]
 pub struct Stats {
     n: f64,
     mean: f64,
-    m2: f64,
 }
 
 impl Stats {
@@ -151,15 +151,10 @@ impl Stats {
         self.n += 1.0;
         let d = x - self.mean;
         self.mean += d / self.n;
-        self.m2 += d * (x - self.mean);
     }
     /// Mean.
     pub fn mean(&self) -> f64 {
         self.mean
-    }
-    /// Standard error of the mean.
-    pub fn std_error(&self) -> f64 {
-        (self.m2 / (self.n - 1.0) / self.n).sqrt()
     }
 }
 
