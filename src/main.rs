@@ -31,7 +31,7 @@ enum Command {
     ///
     /// Without SCENE, renders the built-in Cornell box with a 5x5 grid of ceiling lights.
     /// Settings not given here come from the scene file's `render` block, then defaults
-    /// (64 spp, max depth 8, sampler power, seed 0).
+    /// (64 spp, max depth 8, sampler tree, seed 0).
     Render(RenderArgs),
     /// Load a scene and report what it holds: triangles, lights, power, build times, memory.
     Info {

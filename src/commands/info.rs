@@ -6,17 +6,22 @@ use std::path::Path;
 
 use super::{LoadedScene, human_bytes, human_duration, load_scene};
 use crate::error::Result;
+use crate::light_sampler::{LightTree, TreeStats};
 use crate::scene::BuildOptions;
 
 /// Everything `info` reports.
 pub struct InfoReport {
     /// The loaded scene and timings.
     pub loaded: LoadedScene,
+    /// The light tree built over its lights (none without lights).
+    pub tree: Option<TreeStats>,
 }
 
-/// Loads and builds the scene and gathers its statistics.
+/// Loads and builds the scene and its light tree, and gathers their statistics.
 pub fn info(path: Option<&Path>, options: &BuildOptions) -> Result<InfoReport> {
-    Ok(InfoReport { loaded: load_scene(path, options)? })
+    let loaded = load_scene(path, options)?;
+    let tree = (!loaded.scene.lights.is_empty()).then(|| LightTree::new(&loaded.scene.lights).stats());
+    Ok(InfoReport { loaded, tree })
 }
 
 impl fmt::Display for InfoReport {
@@ -55,6 +60,17 @@ impl fmt::Display for InfoReport {
             human_bytes(st.geometry_bytes),
             human_bytes(st.light_bytes)
         )?;
+        if let Some(t) = &self.tree {
+            writeln!(
+                f,
+                "light tree   built in {}: {} nodes (4-wide), depth {}, {} ({:.0} B/light)",
+                human_duration(t.build_time),
+                t.nodes,
+                t.depth,
+                human_bytes(t.memory_bytes),
+                t.memory_bytes as f64 / s.lights.len() as f64
+            )?;
+        }
         for w in &s.warnings {
             writeln!(f, "warning      {w}")?;
         }

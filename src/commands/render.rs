@@ -18,7 +18,7 @@ use crate::render::{Budget, RenderOutput, RenderSettings, render as render_scene
 use crate::scene::BuildOptions;
 
 /// The light sampler used when neither the command line nor the scene names one.
-pub const DEFAULT_SAMPLER: LightSamplerKind = LightSamplerKind::Power;
+pub const DEFAULT_SAMPLER: LightSamplerKind = LightSamplerKind::Tree;
 
 /// Everything `render` can be told; `None` fields fall back to the scene, then to defaults.
 #[derive(Clone, Debug, Default)]
@@ -65,6 +65,8 @@ pub struct RenderReport {
     pub sampler_build_time: Duration,
     /// Its memory.
     pub sampler_bytes: usize,
+    /// The light tree's shape, when the sampler is `tree`.
+    pub tree: Option<crate::light_sampler::TreeStats>,
     /// The settings rendered with.
     pub settings: RenderSettings,
     /// Film and statistics.
@@ -158,6 +160,7 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
         sampler,
         sampler_build_time,
         sampler_bytes: strategy.memory_bytes(),
+        tree: strategy.tree_stats(),
         settings,
         output,
         written,
@@ -193,6 +196,9 @@ impl fmt::Display for RenderReport {
             human_duration(self.sampler_build_time),
             human_bytes(self.sampler_bytes)
         )?;
+        if let Some(t) = &self.tree {
+            writeln!(f, "tree       {} nodes (4-wide), depth {}", t.nodes, t.depth)?;
+        }
         writeln!(
             f,
             "render     {} spp in {} with {} threads, max depth {}, seed {}",

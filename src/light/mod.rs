@@ -7,6 +7,7 @@
 //! luminance (Rec.709 Y), the scalar the `power` sampler compares. Depends on `math`.
 
 mod area;
+mod bounds;
 mod distant;
 mod point;
 mod quad;
@@ -14,6 +15,7 @@ mod spot;
 mod triangle;
 
 pub use area::AreaEmission;
+pub use bounds::{BoundsView, LightBounds, cone_union};
 pub use distant::DistantLight;
 pub use point::PointLight;
 pub use quad::QuadLight;

@@ -5,10 +5,14 @@
 //! no `dyn` on the hot path) and [`LightStrategy`], which adds the `all` estimator (every
 //! light, one shadow ray each; not a sampler) beside them. Depends on `light` and `math`.
 
+mod local;
 mod power;
+mod tree;
 mod uniform;
 
+pub use local::LocalSampler;
 pub use power::PowerSampler;
+pub use tree::{LightTree, TreeStats};
 pub use uniform::UniformSampler;
 
 use crate::light::{Light, LightId};
@@ -56,6 +60,10 @@ pub enum LightSamplerKind {
     Uniform,
     /// One light, with probability proportional to its emitted power.
     Power,
+    /// One light, from a CDF over every light's importance at the shading point (O(n)).
+    Local,
+    /// One light, by descending a light BVH with the same importance (O(log n)).
+    Tree,
 }
 
 impl LightSamplerKind {
@@ -65,6 +73,8 @@ impl LightSamplerKind {
             LightSamplerKind::All => "all",
             LightSamplerKind::Uniform => "uniform",
             LightSamplerKind::Power => "power",
+            LightSamplerKind::Local => "local",
+            LightSamplerKind::Tree => "tree",
         }
     }
 }
@@ -82,6 +92,10 @@ pub enum AnyLightSampler {
     Uniform(UniformSampler),
     /// See [`PowerSampler`].
     Power(PowerSampler),
+    /// See [`LocalSampler`].
+    Local(LocalSampler),
+    /// See [`LightTree`].
+    Tree(LightTree),
 }
 
 impl LightSampler for AnyLightSampler {
@@ -90,6 +104,8 @@ impl LightSampler for AnyLightSampler {
         match self {
             AnyLightSampler::Uniform(s) => s.sample(ctx, u),
             AnyLightSampler::Power(s) => s.sample(ctx, u),
+            AnyLightSampler::Local(s) => s.sample(ctx, u),
+            AnyLightSampler::Tree(s) => s.sample(ctx, u),
         }
     }
 
@@ -98,6 +114,8 @@ impl LightSampler for AnyLightSampler {
         match self {
             AnyLightSampler::Uniform(s) => s.pmf(ctx, light),
             AnyLightSampler::Power(s) => s.pmf(ctx, light),
+            AnyLightSampler::Local(s) => s.pmf(ctx, light),
+            AnyLightSampler::Tree(s) => s.pmf(ctx, light),
         }
     }
 }
@@ -108,6 +126,8 @@ impl AnyLightSampler {
         match self {
             AnyLightSampler::Uniform(_) => 0,
             AnyLightSampler::Power(s) => s.memory_bytes(),
+            AnyLightSampler::Local(s) => s.memory_bytes(),
+            AnyLightSampler::Tree(s) => s.stats().memory_bytes,
         }
     }
 }
@@ -136,6 +156,16 @@ impl LightStrategy {
             LightSamplerKind::Power => {
                 LightStrategy::One(AnyLightSampler::Power(PowerSampler::new(lights, scene_radius)))
             }
+            LightSamplerKind::Local => LightStrategy::One(AnyLightSampler::Local(LocalSampler::new(lights))),
+            LightSamplerKind::Tree => LightStrategy::One(AnyLightSampler::Tree(LightTree::new(lights))),
+        }
+    }
+
+    /// The light tree's statistics, when this is the `tree` sampler.
+    pub fn tree_stats(&self) -> Option<TreeStats> {
+        match self {
+            LightStrategy::One(AnyLightSampler::Tree(t)) => Some(t.stats()),
+            _ => None,
         }
     }
 

@@ -74,7 +74,8 @@ fn one_light_sampler(kind: LightSamplerKind, lights: &[Light]) -> myriad::light_
 }
 
 /// The one-light samplers under test.
-pub const SAMPLERS: [LightSamplerKind; 2] = [LightSamplerKind::Uniform, LightSamplerKind::Power];
+pub const SAMPLERS: [LightSamplerKind; 4] =
+    [LightSamplerKind::Uniform, LightSamplerKind::Power, LightSamplerKind::Local, LightSamplerKind::Tree];
 
 #[test]
 fn pmf_sums_to_one_and_picks_follow_it() {
@@ -85,7 +86,11 @@ fn pmf_sums_to_one_and_picks_follow_it() {
         let s = one_light_sampler(kind, &lights);
         for ctx in &ctxs {
             let total: f32 = (0..lights.len()).map(|i| s.pmf(ctx, LightId(i as u32))).sum();
-            assert!((total - 1.0).abs() < 1e-4, "{kind}: Σ pmf = {total}");
+            // Σ pmf = 1, except that the tree may find a dead branch (a cluster whose bounds
+            // reach the point while none of its children's do): then `sample` returns None
+            // exactly as often as mass is missing, which check_sampler_at verifies.
+            let may_miss = kind == LightSamplerKind::Tree;
+            assert!((total - 1.0).abs() < 1e-4 || may_miss && total <= 1.0 + 1e-4, "{kind}: Σ pmf = {total}");
             let p = check_sampler_at(&s, ctx, lights.len(), 50_000);
             assert!(p > alpha, "{kind} at {ctx:?}: chi-square p = {p}");
         }
@@ -117,9 +122,11 @@ pub fn check_per_light_weights(sampler: &impl LightSampler, n_lights: usize, ctx
     for (i, a) in acc.iter().enumerate() {
         let pmf = sampler.pmf(ctx, LightId(i as u32)) as f64;
         if pmf * n as f64 >= 200.0 {
-            // Stratified draws: the count is within ±1 of N·pmf.
+            // Within 5 binomial standard deviations (a CDF sampler's stratified count is
+            // within ±1; a reservoir's selected u set is not one interval).
             let w = a / n as f64;
-            assert!((w - 1.0).abs() < 2.0 / (pmf * n as f64) + 1e-3, "light {i}: weight {w} (pmf {pmf})");
+            let tol = 5.0 * ((1.0 - pmf) / (pmf * n as f64)).sqrt() + 1e-4;
+            assert!((w - 1.0).abs() < tol, "light {i}: weight {w} (pmf {pmf})");
         }
     }
 }

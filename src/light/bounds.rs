@@ -1,0 +1,363 @@
+//! `LightBounds`: a conservative summary of what a light (or a cluster of lights) can emit
+//! where, and its importance at a shading point.
+//!
+//! Conty Estevez & Kulla 2018 ("Importance Sampling of Many Lights with Adaptive Tree
+//! Splitting"), as pbrt-v4 `LightBounds` writes it, with the fixes of
+//! `../shared/design/many-lights.md` b.5:
+//! - the distance is clamped with a *squared* length, `d² ≥ (r/2)²` (pbrt clamps d² with an
+//!   unsquared length, which depends on the scene's scale);
+//! - the angle a cluster subtends is bounded by its bounding *sphere* (box corners under-
+//!   estimate it: Cycles #126592);
+//! - the receiver's horizon uses the signed cosine, so a cluster entirely below the surface
+//!   gets importance 0 (pbrt takes |cos|, which only transmissive surfaces need);
+//! - directional lights are "infinite" bounds: a cone of directions towards the lights and an
+//!   irradiance bound, compared with local clusters in the same units (W/m²).
+//!
+//! `phi` is the peak radiant intensity (W/sr) over RGB channels, not power: then φ·cos/d² is
+//! an irradiance bound comparable across light types (a point light of intensity I and a quad
+//! of radiance L and area A with L·A = I rank alike). It is never 0 for a light that emits.
+
+use super::Light;
+use crate::math::{Vec3A, safe_acos, safe_sqrt};
+use std::f32::consts::PI;
+
+/// Conservative emission bounds of a light or cluster.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightBounds {
+    /// Box around the emitting geometry (unused for infinite bounds).
+    pub min: Vec3A,
+    /// Box maximum.
+    pub max: Vec3A,
+    /// Peak radiant intensity bound (W/sr), or irradiance bound (W/m²) for infinite bounds.
+    pub phi: f32,
+    /// Axis of the normal cone (for infinite bounds: direction *towards* the lights).
+    pub w: Vec3A,
+    /// Cosine of the normal cone's half-angle θo.
+    pub cos_theta_o: f32,
+    /// Cosine of the emission spread θe beyond the normals (0 for Lambertian emitters).
+    pub cos_theta_e: f32,
+    /// Emits on both sides of the normals.
+    pub two_sided: bool,
+    /// Directional lights at infinity: no position, no falloff.
+    pub infinite: bool,
+}
+
+/// The decoded form importance is evaluated on (also what compact tree nodes decode to).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoundsView {
+    /// Centre of the bounding sphere.
+    pub center: Vec3A,
+    /// Radius of the bounding sphere.
+    pub radius: f32,
+    /// Emission bound.
+    pub phi: f32,
+    /// Cone axis.
+    pub w: Vec3A,
+    /// cos θo.
+    pub cos_theta_o: f32,
+    /// cos θe.
+    pub cos_theta_e: f32,
+    /// Two-sided emission.
+    pub two_sided: bool,
+    /// Infinite (directional) bounds.
+    pub infinite: bool,
+}
+
+/// Union of two direction cones (axis, cos half-angle); pbrt's `DirectionCone::Union` with
+/// Cycles' 5e-4 containment slack and a whole-sphere fallback for opposite axes (the NaN axis
+/// of Cycles #106528 cannot happen).
+pub fn cone_union(wa: Vec3A, cos_a: f32, wb: Vec3A, cos_b: f32) -> (Vec3A, f32) {
+    let (ta, tb) = (safe_acos(cos_a), safe_acos(cos_b));
+    let td = safe_acos(wa.dot(wb));
+    if (td + tb).min(PI) <= ta + 5e-4 {
+        return (wa, cos_a);
+    }
+    if (td + ta).min(PI) <= tb + 5e-4 {
+        return (wb, cos_b);
+    }
+    let to = 0.5 * (ta + td + tb);
+    if to >= PI {
+        return (wa, -1.0);
+    }
+    let tr = to - ta;
+    // Rotate wa towards wb by tr, in the plane the two span.
+    let perp = wb - wa * wa.dot(wb);
+    let Some(perp) = perp.try_normalize() else { return (wa, -1.0) };
+    let w = (wa * tr.cos() + perp * tr.sin()).normalize();
+    (w, to.cos())
+}
+
+impl LightBounds {
+    /// Union of two bounds; an empty side (phi = 0) is ignored. Both must be finite or both
+    /// infinite.
+    pub fn union(&self, b: &LightBounds) -> LightBounds {
+        if self.phi == 0.0 {
+            return *b;
+        }
+        if b.phi == 0.0 {
+            return *self;
+        }
+        debug_assert_eq!(self.infinite, b.infinite, "finite and infinite bounds are kept apart");
+        let (w, cos_theta_o) = cone_union(self.w, self.cos_theta_o, b.w, b.cos_theta_o);
+        LightBounds {
+            min: self.min.min(b.min),
+            max: self.max.max(b.max),
+            phi: self.phi + b.phi,
+            w,
+            cos_theta_o,
+            cos_theta_e: self.cos_theta_e.min(b.cos_theta_e),
+            two_sided: self.two_sided || b.two_sided,
+            infinite: self.infinite,
+        }
+    }
+
+    /// Centre of the box.
+    pub fn centroid(&self) -> Vec3A {
+        0.5 * (self.min + self.max)
+    }
+
+    /// The decoded view importance is computed on.
+    pub fn view(&self) -> BoundsView {
+        BoundsView {
+            center: self.centroid(),
+            radius: 0.5 * (self.max - self.min).length(),
+            phi: self.phi,
+            w: self.w,
+            cos_theta_o: self.cos_theta_o,
+            cos_theta_e: self.cos_theta_e,
+            two_sided: self.two_sided,
+            infinite: self.infinite,
+        }
+    }
+}
+
+impl BoundsView {
+    /// Importance at point `p` with unit normal `n` (zero vector: not on a surface). An upper
+    /// estimate of the irradiance the cluster can deliver; 0 only when no light in it can
+    /// reach `p` from above its horizon.
+    #[inline]
+    pub fn importance(&self, p: Vec3A, n: Vec3A) -> f32 {
+        if self.phi <= 0.0 {
+            return 0.0;
+        }
+        if self.infinite {
+            // Directions towards the lights lie within θo of w; the best case for the
+            // receiver is the direction closest to its normal.
+            if n == Vec3A::ZERO {
+                return self.phi;
+            }
+            let cos_i = n.dot(self.w);
+            let cos_ip = cos_sub_clamped(cos_i, self.cos_theta_o);
+            return if cos_ip <= 0.0 { 0.0 } else { self.phi * cos_ip };
+        }
+        let d = p - self.center;
+        let dist2 = d.length_squared();
+        let r2 = self.radius * self.radius;
+        // [fix] squared-length clamp: a receiver inside the cluster sees it at ≥ r/2.
+        let d2 = dist2.max(0.25 * r2);
+        let wi = if dist2 > 0.0 { d / dist2.sqrt() } else { Vec3A::ZERO };
+        // Half-angle subtended by the bounding sphere (θb = π inside it).
+        let cos_b = if dist2 <= r2 { -1.0 } else { safe_sqrt(1.0 - r2 / dist2) };
+        let mut cos_w = self.w.dot(wi);
+        if self.two_sided {
+            cos_w = cos_w.abs();
+        }
+        // θ' = max(0, θw − θo − θb): the smallest angle between an emitter normal and the
+        // direction towards p.
+        let cos_x = cos_sub_clamped(cos_w, self.cos_theta_o);
+        let cos_p = cos_sub_clamped(cos_x, cos_b);
+        if cos_p <= self.cos_theta_e {
+            return 0.0;
+        }
+        let mut importance = self.phi * cos_p / d2;
+        if n != Vec3A::ZERO {
+            // [fix] signed horizon test: θi' = max(0, θi − θb), zero when ≥ 90°.
+            let cos_i = n.dot(-wi);
+            let cos_ip = cos_sub_clamped(cos_i, cos_b);
+            if cos_ip <= 0.0 {
+                return 0.0;
+            }
+            importance *= cos_ip;
+        }
+        importance
+    }
+}
+
+/// cos(max(0, a − b)) from cos a and cos b, for angles a, b ∈ [0, π]: 1 when a ≤ b.
+#[inline]
+fn cos_sub_clamped(cos_a: f32, cos_b: f32) -> f32 {
+    if cos_a >= cos_b {
+        return 1.0;
+    }
+    let (sin_a, sin_b) = (safe_sqrt(1.0 - cos_a * cos_a), safe_sqrt(1.0 - cos_b * cos_b));
+    cos_a * cos_b + sin_a * sin_b
+}
+
+/// The widest emission spread θe we allow a spot light: its cone edge must not coincide with
+/// the importance's zero test after round-off (pbrt's 0.999 slop, in angle).
+const MIN_SPOT_SPREAD: f32 = 1e-3;
+
+impl Light {
+    /// Conservative emission bounds (see the module docs for the units of `phi`).
+    pub fn bounds(&self) -> LightBounds {
+        let floor = |phi: f32| phi.max(f32::MIN_POSITIVE);
+        match self {
+            Light::Point(l) => LightBounds {
+                min: l.position,
+                max: l.position,
+                phi: floor(l.intensity.max_element()),
+                w: Vec3A::Z,
+                cos_theta_o: -1.0,
+                cos_theta_e: 0.0,
+                two_sided: false,
+                infinite: false,
+            },
+            Light::Spot(l) => {
+                let (inner, outer) = (safe_acos(l.cos_inner), safe_acos(l.cos_outer));
+                LightBounds {
+                    min: l.position,
+                    max: l.position,
+                    phi: floor(l.intensity.max_element()),
+                    w: l.direction,
+                    cos_theta_o: l.cos_inner,
+                    cos_theta_e: (outer - inner).max(MIN_SPOT_SPREAD).cos(),
+                    two_sided: false,
+                    infinite: false,
+                }
+            }
+            Light::Distant(l) => LightBounds {
+                min: Vec3A::ZERO,
+                max: Vec3A::ZERO,
+                phi: floor(l.irradiance.max_element()),
+                w: -l.direction,
+                cos_theta_o: 1.0,
+                cos_theta_e: 0.0,
+                two_sided: false,
+                infinite: true,
+            },
+            Light::Triangle(l) => LightBounds {
+                min: l.v[0].min(l.v[1]).min(l.v[2]),
+                max: l.v[0].max(l.v[1]).max(l.v[2]),
+                phi: floor(l.emission.radiance.max_element() * l.area),
+                w: l.n,
+                cos_theta_o: 1.0,
+                cos_theta_e: 0.0,
+                two_sided: l.emission.two_sided,
+                infinite: false,
+            },
+            Light::Quad(l) => {
+                let far = l.p0 + l.e1 + l.e2;
+                let (a, b) = (l.p0 + l.e1, l.p0 + l.e2);
+                LightBounds {
+                    min: l.p0.min(far).min(a).min(b),
+                    max: l.p0.max(far).max(a).max(b),
+                    phi: floor(l.emission.radiance.max_element() * l.area),
+                    w: l.n,
+                    cos_theta_o: 1.0,
+                    cos_theta_e: 0.0,
+                    two_sided: l.emission.two_sided,
+                    infinite: false,
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::light::{AreaEmission, PointLight, QuadLight, SpotLight};
+    use crate::math::Rgb;
+
+    fn quad(center: Vec3A, n_down: bool, two_sided: bool) -> Light {
+        let (e1, e2) = if n_down { (Vec3A::X * 0.2, Vec3A::Z * 0.2) } else { (Vec3A::Z * 0.2, Vec3A::X * 0.2) };
+        let e = AreaEmission { radiance: Rgb::splat(10.0), two_sided };
+        Light::Quad(QuadLight::new(center - 0.5 * (e1 + e2), e1, e2, e).unwrap())
+    }
+
+    #[test]
+    fn cone_union_contains_both_cones() {
+        let cases = [
+            (Vec3A::Z, 1.0, Vec3A::X, 1.0),
+            (Vec3A::Z, 0.9, Vec3A::Z, 0.5),
+            (Vec3A::Z, 1.0, -Vec3A::Z, 1.0),
+            (Vec3A::new(0.3, 0.4, 0.866).normalize(), 0.95, Vec3A::new(-0.5, 0.1, 0.8).normalize(), 0.8),
+        ];
+        for (wa, ca, wb, cb) in cases {
+            let (w, c) = cone_union(wa, ca, wb, cb);
+            assert!((w.length() - 1.0).abs() < 1e-4 && w.is_finite());
+            let t = safe_acos(c);
+            for (wx, cx) in [(wa, ca), (wb, cb)] {
+                assert!(safe_acos(w.dot(wx)) + safe_acos(cx) <= t + 1e-3, "{wx} not inside ({w}, {c})");
+            }
+        }
+    }
+
+    #[test]
+    fn importance_respects_facing_and_horizon() {
+        let down = quad(Vec3A::new(0.0, 2.0, 0.0), true, false).bounds().view();
+        let up = quad(Vec3A::new(0.0, 2.0, 0.0), false, false).bounds().view();
+        let floor = Vec3A::ZERO;
+        assert!(down.w.y < 0.0 && up.w.y > 0.0);
+        assert!(down.importance(floor, Vec3A::Y) > 0.0);
+        assert_eq!(up.importance(floor, Vec3A::Y), 0.0, "faces away");
+        assert_eq!(down.importance(floor, -Vec3A::Y), 0.0, "below the receiver's horizon");
+        assert!(down.importance(floor, Vec3A::ZERO) > 0.0, "no normal: no horizon test");
+        let two = quad(Vec3A::new(0.0, 2.0, 0.0), false, true).bounds().view();
+        assert!(two.importance(floor, Vec3A::Y) > 0.0, "two-sided");
+        // Inside the bounding sphere: only the clamped distance matters, never 0 or ∞.
+        let inside = down.importance(Vec3A::new(0.0, 2.0, 0.0), Vec3A::X);
+        assert!(inside.is_finite() && inside > 0.0);
+    }
+
+    #[test]
+    fn importance_is_never_below_the_true_irradiance_bound() {
+        // For a point light the importance is exactly I·cos/d².
+        let l = Light::Point(PointLight { position: Vec3A::new(1.0, 3.0, 0.5), intensity: Rgb::new(2.0, 5.0, 1.0) });
+        let v = l.bounds().view();
+        let p = Vec3A::new(0.0, 0.0, 0.0);
+        let d = l.bounds().centroid() - p;
+        let expect = 5.0 * (d.normalize().dot(Vec3A::Y)) / d.length_squared();
+        assert!((v.importance(p, Vec3A::Y) - expect).abs() < 1e-5 * expect);
+    }
+
+    #[test]
+    fn spot_bounds_cut_off_outside_the_outer_cone_only() {
+        let s = Light::Spot(SpotLight {
+            position: Vec3A::new(0.0, 2.0, 0.0),
+            direction: -Vec3A::Y,
+            intensity: Rgb::ONE,
+            cos_inner: 20f32.to_radians().cos(),
+            cos_outer: 30f32.to_radians().cos(),
+        });
+        let v = s.bounds().view();
+        for deg in [0.0f32, 10.0, 19.0, 25.0, 29.5] {
+            let p = Vec3A::new(2.0 * deg.to_radians().tan(), 0.0, 0.0);
+            assert!(v.importance(p, Vec3A::Y) > 0.0, "{deg}°");
+        }
+        let p = Vec3A::new(2.0 * 31f32.to_radians().tan(), 0.0, 0.0);
+        assert_eq!(v.importance(p, Vec3A::Y), 0.0);
+        // A hard-edged spot (inner = outer) still lights its inside.
+        let hard = Light::Spot(SpotLight {
+            cos_inner: 0.9,
+            cos_outer: 0.9,
+            ..match s {
+                Light::Spot(x) => x,
+                _ => unreachable!(),
+            }
+        });
+        assert!(hard.bounds().view().importance(Vec3A::ZERO, Vec3A::Y) > 0.0);
+    }
+
+    #[test]
+    fn union_sums_power_and_grows_box_and_cone() {
+        let a = quad(Vec3A::new(-1.0, 2.0, 0.0), true, false).bounds();
+        let b = quad(Vec3A::new(1.0, 2.0, 0.0), false, true).bounds();
+        let u = a.union(&b);
+        assert_eq!(u.phi, a.phi + b.phi);
+        assert!(u.min.x < -1.0 && u.max.x > 1.0 && u.two_sided);
+        assert!(u.cos_theta_o <= -1.0 + 1e-4, "opposite normals need the whole sphere");
+        let zero = LightBounds { phi: 0.0, ..a };
+        assert_eq!(zero.union(&b), b);
+    }
+}
