@@ -18,7 +18,8 @@
 //! of radiance L and area A with L·A = I rank alike). It is never 0 for a light that emits.
 
 use super::Light;
-use crate::math::{Vec3A, safe_acos, safe_sqrt};
+use crate::math::{Vec3A, Vec4, safe_acos, safe_sqrt};
+use glam::BVec4A;
 use std::f32::consts::PI;
 
 /// Conservative emission bounds of a light or cluster.
@@ -42,25 +43,139 @@ pub struct LightBounds {
     pub infinite: bool,
 }
 
-/// The decoded form importance is evaluated on (also what compact tree nodes decode to).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BoundsView {
-    /// Centre of the bounding sphere.
-    pub center: Vec3A,
-    /// Radius of the bounding sphere.
-    pub radius: f32,
-    /// Emission bound.
-    pub phi: f32,
-    /// Cone axis.
-    pub w: Vec3A,
+/// Four bounds in structure-of-arrays form, evaluated together with SSE: the form both the
+/// tree's nodes (after decoding) and the `local` sampler evaluate importance on. Empty lanes
+/// have `phi = 0` and importance 0.
+#[derive(Clone, Copy, Debug)]
+pub struct BoundsPacket {
+    /// Bounding-sphere centres.
+    pub cx: Vec4,
+    /// Centre y.
+    pub cy: Vec4,
+    /// Centre z.
+    pub cz: Vec4,
+    /// Squared bounding-sphere radii.
+    pub r2: Vec4,
+    /// Emission bounds.
+    pub phi: Vec4,
+    /// Cone axes.
+    pub wx: Vec4,
+    /// Axis y.
+    pub wy: Vec4,
+    /// Axis z.
+    pub wz: Vec4,
     /// cos θo.
-    pub cos_theta_o: f32,
+    pub cos_o: Vec4,
+    /// sin θo.
+    pub sin_o: Vec4,
     /// cos θe.
-    pub cos_theta_e: f32,
-    /// Two-sided emission.
-    pub two_sided: bool,
-    /// Infinite (directional) bounds.
-    pub infinite: bool,
+    pub cos_e: Vec4,
+    /// Lanes that emit on both sides.
+    pub two_sided: BVec4A,
+    /// Lanes that are directional (infinite) bounds.
+    pub infinite: BVec4A,
+}
+
+/// Lane-wise square root (one SSE instruction on x86-64).
+#[inline(always)]
+fn sqrt4(v: Vec4) -> Vec4 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        // SAFETY: SSE is part of the x86-64 baseline, so the instruction always exists.
+        Vec4::from(unsafe { std::arch::x86_64::_mm_sqrt_ps(v.into()) })
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        v.sqrt()
+    }
+}
+
+/// cos(max(0, a − b)) per lane from cos and sin of a and b (angles in [0, π]): 1 where a ≤ b.
+#[inline(always)]
+fn cos_sub_clamped4(cos_a: Vec4, sin_a: Vec4, cos_b: Vec4, sin_b: Vec4) -> Vec4 {
+    Vec4::select(cos_a.cmpge(cos_b), Vec4::ONE, cos_a * cos_b + sin_a * sin_b)
+}
+
+/// sin θ from cos θ for θ ∈ [0, π].
+#[inline(always)]
+fn sin_from_cos4(c: Vec4) -> Vec4 {
+    sqrt4((Vec4::ONE - c * c).max(Vec4::ZERO))
+}
+
+impl BoundsPacket {
+    /// A packet of up to four bounds.
+    pub fn new(bounds: &[LightBounds]) -> Self {
+        assert!(bounds.len() <= 4);
+        let lane = |f: &dyn Fn(&LightBounds) -> f32, empty: f32| {
+            let mut v = [empty; 4];
+            for (k, b) in bounds.iter().enumerate() {
+                v[k] = f(b);
+            }
+            Vec4::from_array(v)
+        };
+        let mask = |f: &dyn Fn(&LightBounds) -> bool| {
+            let mut v = [false; 4];
+            for (k, b) in bounds.iter().enumerate() {
+                v[k] = f(b);
+            }
+            BVec4A::from_array(v)
+        };
+        let c = |b: &LightBounds| b.centroid();
+        Self {
+            cx: lane(&|b| c(b).x, 0.0),
+            cy: lane(&|b| c(b).y, 0.0),
+            cz: lane(&|b| c(b).z, 0.0),
+            r2: lane(&|b| 0.25 * (b.max - b.min).length_squared(), 0.0),
+            phi: lane(&|b| b.phi, 0.0),
+            wx: lane(&|b| b.w.x, 0.0),
+            wy: lane(&|b| b.w.y, 0.0),
+            wz: lane(&|b| b.w.z, 1.0),
+            cos_o: lane(&|b| b.cos_theta_o, 1.0),
+            sin_o: lane(&|b| safe_sqrt(1.0 - b.cos_theta_o * b.cos_theta_o), 0.0),
+            cos_e: lane(&|b| b.cos_theta_e, 1.0),
+            two_sided: mask(&|b| b.two_sided),
+            infinite: mask(&|b| b.infinite),
+        }
+    }
+
+    /// Importance of each lane at point `p` with unit normal `n` (zero vector: not on a
+    /// surface): an upper estimate of the irradiance the cluster can deliver, 0 only when no
+    /// light in it can reach `p` from above its horizon.
+    #[inline]
+    pub fn importance(&self, p: Vec3A, n: Vec3A) -> Vec4 {
+        let (dx, dy, dz) = (Vec4::splat(p.x) - self.cx, Vec4::splat(p.y) - self.cy, Vec4::splat(p.z) - self.cz);
+        let dist2 = dx * dx + dy * dy + dz * dz;
+        // [fix] squared-length clamp: a receiver inside the cluster sees it at ≥ r/2.
+        // (and 1e-12 m² keeps a receiver exactly at a point light finite).
+        let d2 = dist2.max(0.25 * self.r2).max(Vec4::splat(1e-12));
+        let inv_dist = Vec4::select(dist2.cmpgt(Vec4::ZERO), sqrt4(dist2).recip(), Vec4::ZERO);
+        // Unit direction from the cluster towards p.
+        let (wix, wiy, wiz) = (dx * inv_dist, dy * inv_dist, dz * inv_dist);
+        // Half-angle subtended by the bounding sphere (θb = π inside it).
+        let inside = dist2.cmple(self.r2);
+        let sin_b2 = Vec4::select(inside, Vec4::ONE, self.r2 * inv_dist * inv_dist);
+        let cos_b = Vec4::select(inside, Vec4::NEG_ONE, sqrt4((Vec4::ONE - sin_b2).max(Vec4::ZERO)));
+        let sin_b = Vec4::select(inside, Vec4::ZERO, sqrt4(sin_b2));
+        let mut cos_w = self.wx * wix + self.wy * wiy + self.wz * wiz;
+        cos_w = Vec4::select(self.two_sided, cos_w.abs(), cos_w);
+        // θ' = max(0, θw − θo − θb): the smallest angle between an emitter normal and the
+        // direction towards p.
+        let cos_x = cos_sub_clamped4(cos_w, sin_from_cos4(cos_w), self.cos_o, self.sin_o);
+        let cos_p = cos_sub_clamped4(cos_x, sin_from_cos4(cos_x), cos_b, sin_b);
+        let mut importance = Vec4::select(cos_p.cmpgt(self.cos_e), self.phi * cos_p / d2, Vec4::ZERO);
+        // Directional lanes: irradiance times the best cosine over the cone of directions.
+        let mut infinite = self.phi;
+        if n != Vec3A::ZERO {
+            let (nx, ny, nz) = (Vec4::splat(n.x), Vec4::splat(n.y), Vec4::splat(n.z));
+            // [fix] signed horizon test: θi' = max(0, θi − θb), zero when ≥ 90°.
+            let cos_i = -(nx * wix + ny * wiy + nz * wiz);
+            let cos_ip = cos_sub_clamped4(cos_i, sin_from_cos4(cos_i), cos_b, sin_b);
+            importance *= cos_ip.max(Vec4::ZERO);
+            let cos_n = nx * self.wx + ny * self.wy + nz * self.wz;
+            infinite *= cos_sub_clamped4(cos_n, sin_from_cos4(cos_n), self.cos_o, self.sin_o).max(Vec4::ZERO);
+        }
+        Vec4::select(self.infinite, infinite, importance)
+    }
 }
 
 /// Union of two direction cones (axis, cos half-angle); pbrt's `DirectionCone::Union` with
@@ -115,82 +230,6 @@ impl LightBounds {
     pub fn centroid(&self) -> Vec3A {
         0.5 * (self.min + self.max)
     }
-
-    /// The decoded view importance is computed on.
-    pub fn view(&self) -> BoundsView {
-        BoundsView {
-            center: self.centroid(),
-            radius: 0.5 * (self.max - self.min).length(),
-            phi: self.phi,
-            w: self.w,
-            cos_theta_o: self.cos_theta_o,
-            cos_theta_e: self.cos_theta_e,
-            two_sided: self.two_sided,
-            infinite: self.infinite,
-        }
-    }
-}
-
-impl BoundsView {
-    /// Importance at point `p` with unit normal `n` (zero vector: not on a surface). An upper
-    /// estimate of the irradiance the cluster can deliver; 0 only when no light in it can
-    /// reach `p` from above its horizon.
-    #[inline]
-    pub fn importance(&self, p: Vec3A, n: Vec3A) -> f32 {
-        if self.phi <= 0.0 {
-            return 0.0;
-        }
-        if self.infinite {
-            // Directions towards the lights lie within θo of w; the best case for the
-            // receiver is the direction closest to its normal.
-            if n == Vec3A::ZERO {
-                return self.phi;
-            }
-            let cos_i = n.dot(self.w);
-            let cos_ip = cos_sub_clamped(cos_i, self.cos_theta_o);
-            return if cos_ip <= 0.0 { 0.0 } else { self.phi * cos_ip };
-        }
-        let d = p - self.center;
-        let dist2 = d.length_squared();
-        let r2 = self.radius * self.radius;
-        // [fix] squared-length clamp: a receiver inside the cluster sees it at ≥ r/2.
-        let d2 = dist2.max(0.25 * r2);
-        let wi = if dist2 > 0.0 { d / dist2.sqrt() } else { Vec3A::ZERO };
-        // Half-angle subtended by the bounding sphere (θb = π inside it).
-        let cos_b = if dist2 <= r2 { -1.0 } else { safe_sqrt(1.0 - r2 / dist2) };
-        let mut cos_w = self.w.dot(wi);
-        if self.two_sided {
-            cos_w = cos_w.abs();
-        }
-        // θ' = max(0, θw − θo − θb): the smallest angle between an emitter normal and the
-        // direction towards p.
-        let cos_x = cos_sub_clamped(cos_w, self.cos_theta_o);
-        let cos_p = cos_sub_clamped(cos_x, cos_b);
-        if cos_p <= self.cos_theta_e {
-            return 0.0;
-        }
-        let mut importance = self.phi * cos_p / d2;
-        if n != Vec3A::ZERO {
-            // [fix] signed horizon test: θi' = max(0, θi − θb), zero when ≥ 90°.
-            let cos_i = n.dot(-wi);
-            let cos_ip = cos_sub_clamped(cos_i, cos_b);
-            if cos_ip <= 0.0 {
-                return 0.0;
-            }
-            importance *= cos_ip;
-        }
-        importance
-    }
-}
-
-/// cos(max(0, a − b)) from cos a and cos b, for angles a, b ∈ [0, π]: 1 when a ≤ b.
-#[inline]
-fn cos_sub_clamped(cos_a: f32, cos_b: f32) -> f32 {
-    if cos_a >= cos_b {
-        return 1.0;
-    }
-    let (sin_a, sin_b) = (safe_sqrt(1.0 - cos_a * cos_a), safe_sqrt(1.0 - cos_b * cos_b));
-    cos_a * cos_b + sin_a * sin_b
 }
 
 /// The widest emission spread θe we allow a spot light: its cone edge must not coincide with
@@ -269,6 +308,22 @@ mod tests {
     use crate::light::{AreaEmission, PointLight, QuadLight, SpotLight};
     use crate::math::Rgb;
 
+    fn imp(b: &LightBounds, p: Vec3A, n: Vec3A) -> f32 {
+        BoundsPacket::new(&[*b]).importance(p, n).x
+    }
+
+    #[test]
+    fn packet_lanes_are_independent_and_empty_lanes_are_zero() {
+        let a = quad(Vec3A::new(0.0, 2.0, 0.0), true, false).bounds();
+        let b = Light::Point(PointLight { position: Vec3A::new(1.0, 1.0, 0.0), intensity: Rgb::ONE }).bounds();
+        let p = Vec3A::new(0.2, 0.0, 0.1);
+        let v = BoundsPacket::new(&[a, b]).importance(p, Vec3A::Y);
+        assert_eq!(v.x, imp(&a, p, Vec3A::Y));
+        assert_eq!(v.y, imp(&b, p, Vec3A::Y));
+        assert_eq!((v.z, v.w), (0.0, 0.0));
+        assert_eq!(BoundsPacket::new(&[]).importance(Vec3A::ZERO, Vec3A::ZERO), Vec4::ZERO);
+    }
+
     fn quad(center: Vec3A, n_down: bool, two_sided: bool) -> Light {
         let (e1, e2) = if n_down { (Vec3A::X * 0.2, Vec3A::Z * 0.2) } else { (Vec3A::Z * 0.2, Vec3A::X * 0.2) };
         let e = AreaEmission { radiance: Rgb::splat(10.0), two_sided };
@@ -295,18 +350,18 @@ mod tests {
 
     #[test]
     fn importance_respects_facing_and_horizon() {
-        let down = quad(Vec3A::new(0.0, 2.0, 0.0), true, false).bounds().view();
-        let up = quad(Vec3A::new(0.0, 2.0, 0.0), false, false).bounds().view();
+        let down = quad(Vec3A::new(0.0, 2.0, 0.0), true, false).bounds();
+        let up = quad(Vec3A::new(0.0, 2.0, 0.0), false, false).bounds();
         let floor = Vec3A::ZERO;
         assert!(down.w.y < 0.0 && up.w.y > 0.0);
-        assert!(down.importance(floor, Vec3A::Y) > 0.0);
-        assert_eq!(up.importance(floor, Vec3A::Y), 0.0, "faces away");
-        assert_eq!(down.importance(floor, -Vec3A::Y), 0.0, "below the receiver's horizon");
-        assert!(down.importance(floor, Vec3A::ZERO) > 0.0, "no normal: no horizon test");
-        let two = quad(Vec3A::new(0.0, 2.0, 0.0), false, true).bounds().view();
-        assert!(two.importance(floor, Vec3A::Y) > 0.0, "two-sided");
+        assert!(imp(&down, floor, Vec3A::Y) > 0.0);
+        assert_eq!(imp(&up, floor, Vec3A::Y), 0.0, "faces away");
+        assert_eq!(imp(&down, floor, -Vec3A::Y), 0.0, "below the receiver's horizon");
+        assert!(imp(&down, floor, Vec3A::ZERO) > 0.0, "no normal: no horizon test");
+        let two = quad(Vec3A::new(0.0, 2.0, 0.0), false, true).bounds();
+        assert!(imp(&two, floor, Vec3A::Y) > 0.0, "two-sided");
         // Inside the bounding sphere: only the clamped distance matters, never 0 or ∞.
-        let inside = down.importance(Vec3A::new(0.0, 2.0, 0.0), Vec3A::X);
+        let inside = imp(&down, Vec3A::new(0.0, 2.0, 0.0), Vec3A::X);
         assert!(inside.is_finite() && inside > 0.0);
     }
 
@@ -314,11 +369,11 @@ mod tests {
     fn importance_is_never_below_the_true_irradiance_bound() {
         // For a point light the importance is exactly I·cos/d².
         let l = Light::Point(PointLight { position: Vec3A::new(1.0, 3.0, 0.5), intensity: Rgb::new(2.0, 5.0, 1.0) });
-        let v = l.bounds().view();
+        let v = l.bounds();
         let p = Vec3A::new(0.0, 0.0, 0.0);
         let d = l.bounds().centroid() - p;
         let expect = 5.0 * (d.normalize().dot(Vec3A::Y)) / d.length_squared();
-        assert!((v.importance(p, Vec3A::Y) - expect).abs() < 1e-5 * expect);
+        assert!((imp(&v, p, Vec3A::Y) - expect).abs() < 1e-5 * expect);
     }
 
     #[test]
@@ -330,13 +385,13 @@ mod tests {
             cos_inner: 20f32.to_radians().cos(),
             cos_outer: 30f32.to_radians().cos(),
         });
-        let v = s.bounds().view();
+        let v = s.bounds();
         for deg in [0.0f32, 10.0, 19.0, 25.0, 29.5] {
             let p = Vec3A::new(2.0 * deg.to_radians().tan(), 0.0, 0.0);
-            assert!(v.importance(p, Vec3A::Y) > 0.0, "{deg}°");
+            assert!(imp(&v, p, Vec3A::Y) > 0.0, "{deg}°");
         }
         let p = Vec3A::new(2.0 * 31f32.to_radians().tan(), 0.0, 0.0);
-        assert_eq!(v.importance(p, Vec3A::Y), 0.0);
+        assert_eq!(imp(&v, p, Vec3A::Y), 0.0);
         // A hard-edged spot (inner = outer) still lights its inside.
         let hard = Light::Spot(SpotLight {
             cos_inner: 0.9,
@@ -346,7 +401,7 @@ mod tests {
                 _ => unreachable!(),
             }
         });
-        assert!(hard.bounds().view().importance(Vec3A::ZERO, Vec3A::Y) > 0.0);
+        assert!(imp(&hard.bounds(), Vec3A::ZERO, Vec3A::Y) > 0.0);
     }
 
     #[test]

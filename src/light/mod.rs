@@ -15,7 +15,7 @@ mod spot;
 mod triangle;
 
 pub use area::AreaEmission;
-pub use bounds::{BoundsView, LightBounds, cone_union};
+pub use bounds::{BoundsPacket, LightBounds, cone_union};
 pub use distant::DistantLight;
 pub use point::PointLight;
 pub use quad::QuadLight;

@@ -100,13 +100,21 @@ impl Bins {
         Self { bounds: [[EMPTY; BUCKETS]; 3], counts: [[0; BUCKETS]; 3] }
     }
 
-    fn add(mut self, item: &Item, lo: Vec3A, scale: Vec3A) -> Self {
+    fn add(&mut self, item: &Item, lo: Vec3A, scale: Vec3A) {
         for a in 0..3 {
             let b = bucket(item.centroid[a], lo[a], scale[a]);
             self.bounds[a][b] = self.bounds[a][b].union(&item.bounds);
             self.counts[a][b] += 1;
         }
-        self
+    }
+
+    /// Bins of a slice of items.
+    fn of(items: &[Item], lo: Vec3A, scale: Vec3A) -> Self {
+        let mut bins = Self::new();
+        for it in items {
+            bins.add(it, lo, scale);
+        }
+        bins
     }
 
     fn merge(mut self, o: Self) -> Self {
@@ -146,12 +154,9 @@ fn split(items: &mut [Item], force_median: bool) -> usize {
     }
     let scale = Vec3A::select(ext.cmpgt(Vec3A::ZERO), Vec3A::splat(BUCKETS as f32) / ext, Vec3A::ZERO);
     let bins = if m > PARALLEL_BINNING {
-        items
-            .par_chunks(8192)
-            .map(|c| c.iter().fold(Bins::new(), |b, it| b.add(it, clo, scale)))
-            .reduce(Bins::new, Bins::merge)
+        items.par_chunks(8192).map(|c| Bins::of(c, clo, scale)).reduce(Bins::new, Bins::merge)
     } else {
-        items.iter().fold(Bins::new(), |b, it| b.add(it, clo, scale))
+        Bins::of(items, clo, scale)
     };
     let node_ext = if node.infinite { ext } else { node.max - node.min };
     let (mut best, mut best_cost) = (None, f32::INFINITY);

@@ -2,9 +2,9 @@
 //!
 //! Conty Estevez & Kulla 2018 as in pbrt-v4 and Cycles, with what those two miss:
 //! - **4-wide nodes with the children's bounds stored in the parent.** The binary SAOH tree
-//!   (`build.rs`) is collapsed two levels at a time, so one decision weighs four tighter
-//!   clusters instead of two looser ones (Psychopath and Luminary report wider trees sample
-//!   better), and one node fetch (112 bytes) yields all four importances.
+//!   (`build.rs`) is collapsed so that one decision weighs four tighter clusters instead of
+//!   two looser ones (Psychopath and Luminary report wider trees sample better); a node is
+//!   128 bytes (`compact.rs`) and one SSE evaluation yields all four importances.
 //! - **One number, remapped down the tree in f64**, so the stratification of `u` survives
 //!   and 20+ levels do not collapse neighbouring `u` onto one light.
 //! - **Exact pmf by replaying the light's path**: a 64-bit trail (2 bits per level) per
@@ -23,7 +23,7 @@ mod compact;
 use std::time::{Duration, Instant};
 
 use self::build::{BinNode, Child, Item};
-use self::compact::{CompactBounds, Quantizer};
+use self::compact::{Node, Quantizer};
 use super::{LightSampler, SampledLight, ShadingContext};
 use crate::light::{Light, LightBounds, LightId};
 use crate::math::Vec3A;
@@ -36,14 +36,6 @@ const LEAF: u32 = 1 << 31;
 const NONE: u32 = u32::MAX;
 /// Levels a 64-bit trail of 2-bit choices can record.
 const MAX_DEPTH: u32 = 32;
-
-/// One 4-wide node: its children's quantised bounds and references.
-#[derive(Clone, Copy, Debug)]
-#[repr(C, align(16))]
-struct Node {
-    bounds: [CompactBounds; WIDTH],
-    children: [u32; WIDTH],
-}
 
 /// Build statistics, for `info` and the render summary.
 #[derive(Clone, Copy, Debug, Default)]
@@ -68,18 +60,11 @@ pub struct LightTree {
     stats: TreeStats,
 }
 
-/// Importances of a node's children at `ctx`, and their sum.
+/// Importances of a node's children at `ctx` (0 for empty slots), and their sum.
 #[inline]
 fn importances(node: &Node, grid: &Quantizer, ctx: &ShadingContext) -> ([f64; WIDTH], f64) {
-    let mut imp = [0.0f64; WIDTH];
-    let mut total = 0.0;
-    for k in 0..WIDTH {
-        if node.children[k] != NONE {
-            imp[k] = node.bounds[k].decode(grid).importance(ctx.p, ctx.n) as f64;
-            total += imp[k];
-        }
-    }
-    (imp, total)
+    let imp = node.decode(grid).importance(ctx.p, ctx.n).to_array().map(|x| x as f64);
+    (imp, imp.iter().sum())
 }
 
 /// Turns the binary tree into 4-wide nodes, choosing for each node which binary
@@ -159,9 +144,8 @@ impl Collapser<'_> {
         self.slot_entries(a, j, &mut entries);
         self.slot_entries(b, WIDTH - j, &mut entries);
         let index = self.nodes.len();
-        self.nodes.push(Node { bounds: [CompactBounds::default(); WIDTH], children: [NONE; WIDTH] });
+        self.nodes.push(Node::empty());
         for (k, &c) in entries.iter().enumerate() {
-            let bounds = CompactBounds::new(self.bounds_of(c), &self.grid);
             let child_trail = trail | ((k as u64) << (2 * depth));
             let reference = match c {
                 Child::Item(i) => {
@@ -174,8 +158,8 @@ impl Collapser<'_> {
                     self.emit(x, y, child_trail, depth + 1)
                 }
             };
-            self.nodes[index].bounds[k] = bounds;
-            self.nodes[index].children[k] = reference;
+            let bounds = *self.bounds_of(c);
+            self.nodes[index].set(k, reference, &bounds, &self.grid);
         }
         index as u32
     }
@@ -239,12 +223,9 @@ impl LightTree {
             }
             [Child::Item(i)] => {
                 // One light: a root with a single child.
-                let light = items[i as usize].light;
-                c.nodes.push(Node {
-                    bounds: [CompactBounds::default(); WIDTH],
-                    children: [LEAF | light, NONE, NONE, NONE],
-                });
-                c.nodes[0].bounds[0] = CompactBounds::new(&items[i as usize].bounds, &grid);
+                let mut root = Node::empty();
+                root.set(0, LEAF | items[i as usize].light, &items[i as usize].bounds, &grid);
+                c.nodes.push(root);
                 c.depth = 1;
             }
             _ => unreachable!("one or two parts"),
@@ -277,13 +258,13 @@ impl LightSampler for LightTree {
             let target = u * total;
             let last = (0..WIDTH).rev().find(|&j| imp[j] > 0.0).expect("total > 0");
             let (mut k, mut below) = (last, 0.0);
-            for j in 0..last {
-                if imp[j] > 0.0 {
-                    if target < below + imp[j] {
+            for (j, &w) in imp[..last].iter().enumerate() {
+                if w > 0.0 {
+                    if target < below + w {
                         k = j;
                         break;
                     }
-                    below += imp[j];
+                    below += w;
                 }
             }
             u = ((target - below) / imp[k]).clamp(0.0, 1.0 - f64::EPSILON);
