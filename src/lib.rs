@@ -28,6 +28,7 @@
 
 pub mod camera;
 pub mod commands;
+pub mod compare;
 pub mod error;
 pub mod film;
 pub mod geometry;

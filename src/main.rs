@@ -5,16 +5,20 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use clap::{Args, Parser, Subcommand};
+use myriad::commands::compare::{CompareOptions, compare};
+use myriad::commands::diff::diff;
 use myriad::commands::{self, info::info, render::RenderOptions};
 use myriad::film::AovSet;
 use myriad::light_sampler::LightSamplerKind;
 use myriad::math::UVec2;
+use myriad::render::Budget;
 use myriad::scene::BuildOptions;
 
 /// myriad: a path tracer for scenes lit by very many lights.
 ///
 /// Renders .ron scenes (with procedural light grids) and .obj files to EXR, choosing
-/// lights with one of several samplers so you can see which wins on your scene.
+/// lights with one of several samplers (all, uniform, power, local, tree), and compares the
+/// samplers on your own scenes (`myriad compare`).
 #[derive(Parser)]
 #[command(version, about, long_about)]
 struct Cli {
@@ -33,6 +37,23 @@ enum Command {
     /// Settings not given here come from the scene file's `render` block, then defaults
     /// (64 spp, max depth 8, sampler tree, seed 0).
     Render(RenderArgs),
+    /// Render a scene with several light samplers and measure each against a reference.
+    ///
+    /// Every sampler renders with the same seeds (equal spp: identical camera rays and BSDF
+    /// directions, so differences come from the light choice alone), or for the same time.
+    /// Writes each render, a false-colour error map, a labelled contact sheet, a plot of relMSE
+    /// against time (SVG), report.md and report.json to the output folder, and prints the table.
+    Compare(CompareArgs),
+    /// MSE and relMSE of IMAGE against REFERENCE (EXR files of the same size).
+    Diff {
+        /// The image to judge.
+        image: PathBuf,
+        /// The reference.
+        reference: PathBuf,
+        /// Write a false-colour relative-error PNG here.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Load a scene and report what it holds: triangles, lights, power, build times, memory.
     Info {
         /// Scene file (.ron or .obj); default: the built-in Cornell box.
@@ -91,6 +112,54 @@ struct RenderArgs {
     quiet: bool,
 }
 
+#[derive(Args)]
+struct CompareArgs {
+    /// Scene file (.ron or .obj).
+    scene: PathBuf,
+    /// Samplers to compare, comma-separated.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "uniform,power,local,tree")]
+    samplers: Vec<LightSamplerKind>,
+    /// Equal spp: every sampler renders this many samples per pixel (default 16).
+    #[arg(long, conflicts_with = "time")]
+    spp: Option<u32>,
+    /// Equal time: every sampler renders this many seconds (per seed).
+    #[arg(long, value_parser = parse_seconds)]
+    time: Option<Duration>,
+    /// Reference EXR to measure against (default: render one and cache it in the output folder).
+    #[arg(long, conflicts_with_all = ["reference_spp", "reference_sampler"])]
+    reference: Option<PathBuf>,
+    /// spp of the rendered reference.
+    #[arg(long, default_value_t = 1024)]
+    reference_spp: u32,
+    /// Sampler of the rendered reference (default: all up to 64 lights, local up to 10^4, tree beyond).
+    #[arg(long, value_enum)]
+    reference_sampler: Option<LightSamplerKind>,
+    /// Seeds per sampler: metrics become mean ± standard deviation, and the bias check gains power.
+    #[arg(long, default_value_t = 1)]
+    seeds: u32,
+    /// Output folder (default: compare-<scene name>).
+    #[arg(long)]
+    out_dir: Option<PathBuf>,
+    /// Image size, e.g. 320x240.
+    #[arg(long, value_parser = parse_resolution)]
+    resolution: Option<UVec2>,
+    /// Maximum number of bounces.
+    #[arg(long, conflicts_with = "direct_only")]
+    max_depth: Option<u32>,
+    /// Direct lighting only (same as --max-depth 1).
+    #[arg(long)]
+    direct_only: bool,
+    /// Camera to use, by name.
+    #[arg(long)]
+    camera: Option<String>,
+    /// Exposure of the previews, in stops.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+    /// Hide the progress bars.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
 fn parse_seconds(s: &str) -> Result<Duration, String> {
     let v: f64 = s.parse().map_err(|_| format!("'{s}' is not a number of seconds"))?;
     if v > 0.0 && v.is_finite() { Ok(Duration::from_secs_f64(v)) } else { Err("the time must be positive".into()) }
@@ -137,6 +206,47 @@ fn run(cli: Cli) -> myriad::Result<()> {
                 progress: !a.quiet,
             };
             println!("{}", commands::render::render(&opts)?);
+        }
+        Command::Compare(a) => {
+            let out_dir = a.out_dir.unwrap_or_else(|| {
+                PathBuf::from(format!(
+                    "compare-{}",
+                    a.scene.file_stem().map_or("scene".into(), |s| s.to_string_lossy())
+                ))
+            });
+            let opts = CompareOptions {
+                scene: a.scene,
+                samplers: a.samplers,
+                budget: match a.time {
+                    Some(t) => Budget::Time(t),
+                    None => Budget::Spp(a.spp.unwrap_or(16).max(1)),
+                },
+                reference: a.reference,
+                reference_spp: a.reference_spp.max(1),
+                reference_sampler: a.reference_sampler,
+                seeds: a.seeds.max(1),
+                out_dir: out_dir.clone(),
+                resolution: a.resolution,
+                max_depth: if a.direct_only { Some(1) } else { a.max_depth },
+                camera: a.camera,
+                exposure: a.exposure,
+                progress: !a.quiet,
+            };
+            let report = compare(&opts)?;
+            println!("{}", report.table());
+            for s in report.samplers.iter().filter(|s| s.bias.flagged) {
+                println!(
+                    "warning: {} disagrees with the reference (z = {:.1}): biased sampler or unconverged reference",
+                    s.sampler, s.bias.z
+                );
+            }
+            println!(
+                "wrote {} (report.md, report.json, contact-sheet.png, convergence.svg, per-sampler EXR and error maps)",
+                out_dir.display()
+            );
+        }
+        Command::Diff { image, reference, out } => {
+            println!("{}", diff(&image, &reference, out.as_deref())?);
         }
         Command::Info { scene, camera } => {
             print!("{}", info(scene.as_deref(), &BuildOptions { resolution: None, camera })?);

@@ -129,7 +129,8 @@ fn render_pass(
 
 /// Renders `scene` with `strategy` in the current rayon pool. `progress` (if any) advances by
 /// one per camera sample; its length is set for `Budget::Spp`. `on_pass` sees the film after
-/// every pass (equal-time renders run several; a fixed-spp render runs one).
+/// every pass: at 1, 2, 4, … spp for a fixed-spp render, every ~1/20 of the budget for an
+/// equal-time one.
 pub fn render(
     scene: &Scene,
     strategy: &LightStrategy,
@@ -152,8 +153,14 @@ pub fn render(
             if let Some(pb) = progress {
                 pb.set_length(pixels * n as u64);
             }
-            run(&mut film, 0, n, &mut stats, progress);
-            on_pass(&film, start.elapsed());
+            // Passes of 1, 1, 2, 4, … samples: `on_pass` sees the image at every power of two
+            // (convergence plots), and the sums equal one pass over 0..n bit for bit.
+            while film.spp() < n {
+                let first = film.spp();
+                let count = first.max(1).min(n - first);
+                run(&mut film, first, count, &mut stats, progress);
+                on_pass(&film, start.elapsed());
+            }
         }
         Budget::Time(limit) => {
             if let Some(pb) = progress {

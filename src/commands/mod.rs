@@ -1,10 +1,12 @@
-//! The user-facing commands as library functions: what `myriad render` and `myriad info` do,
-//! minus argument parsing and printing (which stay in `main.rs`).
+//! The user-facing commands as library functions: what `myriad render`, `info`, `compare` and
+//! `diff` do, minus argument parsing and printing (which stay in `main.rs`).
 //!
 //! Owns: loading a scene from a path or the built-in default, resolving settings (command
 //! line over scene file over myriad's defaults), timing every stage, and the reports the
 //! binary prints. Tests call these functions exactly as the binary does.
 
+pub mod compare;
+pub mod diff;
 pub mod info;
 pub mod render;
 

@@ -3,6 +3,7 @@
 mod bsdfs;
 mod cli;
 mod common;
+mod compare;
 mod light_samplers;
 mod render;
 mod scene_loading;

@@ -262,20 +262,24 @@ fn same_seed_gives_identical_pixels_for_any_thread_count() {
 }
 
 #[test]
-fn split_sample_ranges_merge_into_the_full_render() {
-    // Samples 0..4 then 4..8 equal samples 0..8: the equal-time path relies on it.
+fn pass_boundaries_do_not_change_pixels() {
+    // A fixed-spp render runs passes of 1, 1, 2, 4 samples; an equal-time render runs passes
+    // sized by the clock. Both add each pixel's samples in index order, so whatever spp the
+    // timed render reached, a fixed-spp render of that many samples matches it bit for bit.
     let opts = BuildOptions { resolution: Some(UVec2::new(8, 6)), camera: None };
     let scene = load_scene(None, &opts).unwrap().scene;
     let strategy = LightStrategy::build(LightSamplerKind::Uniform, &scene.lights, scene.radius);
     let settings = RenderSettings { budget: Budget::Spp(8), seed: 9, max_depth: 4, aovs: Default::default() };
-    let whole = render(&scene, &strategy, &settings, None, &mut |_, _| {}).film;
     let mut passes = Vec::new();
-    let timed = RenderSettings { budget: Budget::Time(std::time::Duration::from_millis(300)), ..settings };
-    let out = render(&scene, &strategy, &timed, None, &mut |f, _| passes.push(f.spp()));
-    assert!(out.stats.spp >= 1 && passes.windows(2).all(|w| w[0] < w[1]));
-    if out.stats.spp >= 8 {
-        // Not comparable bit-for-bit unless the pass boundaries fall on 8; check the mean only.
-        let a: f32 = (0..48).map(|i| whole.mean(i).x).sum();
-        assert!(a > 0.0);
+    render(&scene, &strategy, &settings, None, &mut |f, _| passes.push(f.spp()));
+    assert_eq!(passes, [1, 2, 4, 8]);
+    let timed = RenderSettings { budget: Budget::Time(std::time::Duration::from_millis(200)), ..settings };
+    let mut timed_passes = Vec::new();
+    let out = render(&scene, &strategy, &timed, None, &mut |f, _| timed_passes.push(f.spp()));
+    assert!(timed_passes.len() > 1 && timed_passes.windows(2).all(|w| w[0] < w[1]));
+    let fixed = RenderSettings { budget: Budget::Spp(out.stats.spp), ..settings };
+    let again = render(&scene, &strategy, &fixed, None, &mut |_, _| {}).film;
+    for i in 0..48 {
+        assert_eq!(out.film.mean(i), again.mean(i), "pixel {i}");
     }
 }

@@ -1,0 +1,171 @@
+//! Error metrics between an image and a reference (conventions.md): MSE, relMSE,
+//! efficiency, per-pixel relative error, and the bias check. Pure functions; no rendering.
+
+use crate::error::{Error, Result};
+use crate::math::Rgb;
+
+/// ε of relMSE = mean((x − ref)² / (ref² + ε)): keeps dark pixels from dominating.
+pub const REL_MSE_EPSILON: f64 = 0.01;
+
+/// Error of an image against a reference.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct ErrorMetrics {
+    /// Mean squared error over pixels and channels.
+    pub mse: f64,
+    /// Mean relative squared error over pixels and channels.
+    pub rel_mse: f64,
+}
+
+/// MSE and relMSE of `image` against `reference` (same length).
+pub fn error_metrics(image: &[Rgb], reference: &[Rgb]) -> Result<ErrorMetrics> {
+    if image.len() != reference.len() {
+        return Err(Error::Usage(format!("images differ in size: {} vs {} pixels", image.len(), reference.len())));
+    }
+    let (mut se, mut rel) = (0.0f64, 0.0f64);
+    for (x, y) in image.iter().zip(reference) {
+        for c in 0..3 {
+            let (x, y) = (x[c] as f64, y[c] as f64);
+            let d2 = (x - y) * (x - y);
+            se += d2;
+            rel += d2 / (y * y + REL_MSE_EPSILON);
+        }
+    }
+    let n = (3 * image.len().max(1)) as f64;
+    Ok(ErrorMetrics { mse: se / n, rel_mse: rel / n })
+}
+
+/// Per-pixel relative RMS error √(mean over channels of (x − y)²/(y² + ε)), for error maps.
+pub fn relative_error_map(image: &[Rgb], reference: &[Rgb]) -> Vec<f32> {
+    image
+        .iter()
+        .zip(reference)
+        .map(|(x, y)| {
+            let e: f64 = (0..3)
+                .map(|c| {
+                    let (x, y) = (x[c] as f64, y[c] as f64);
+                    (x - y) * (x - y) / (y * y + REL_MSE_EPSILON)
+                })
+                .sum();
+            (e / 3.0).sqrt() as f32
+        })
+        .collect()
+}
+
+/// Efficiency 1/(relMSE · seconds): the inverse of the time needed to reach a given error,
+/// once error falls as 1/t.
+pub fn efficiency(rel_mse: f64, seconds: f64) -> f64 {
+    if rel_mse > 0.0 && seconds > 0.0 { 1.0 / (rel_mse * seconds) } else { f64::INFINITY }
+}
+
+/// Result of testing whether a mean image agrees with the reference.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct BiasCheck {
+    /// Mean difference (image − reference) over pixels and channels.
+    pub mean_difference: f64,
+    /// Its z-score.
+    pub z: f64,
+    /// Two-sided p-value.
+    pub p: f64,
+    /// True when p is below the threshold: the sampler (or the reference) looks biased.
+    pub flagged: bool,
+}
+
+/// Two-sided p-value of a standard normal z (Abramowitz & Stegun 7.1.26 erfc; error < 1.5e-7).
+pub fn normal_p_value(z: f64) -> f64 {
+    let x = z.abs() / std::f64::consts::SQRT_2;
+    let t = 1.0 / (1.0 + 0.327_591_1 * x);
+    let poly =
+        t * (0.254_829_592 + t * (-0.284_496_736 + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
+    (poly * (-x * x).exp()).clamp(0.0, 1.0)
+}
+
+/// Tests whether `mean` (an average of renders, per-pixel variance of the mean
+/// `mean_variance`) agrees with `reference` (its own variance, or zeros) at significance
+/// `alpha`: a z-test on a weighted sum of the residuals, each pixel weighted by
+/// 1/(|reference| + 0.05) (channels averaged, worst-case correlated variance).
+///
+/// The weights make the test relative, so the few very noisy bright pixels (directly seen
+/// lamps) do not drown a bias spread over the image, which a plain sum of residuals would
+/// miss. They depend on the reference only: weights computed from the tested renders
+/// themselves (inverse-variance, standardised residuals) correlate with their noise and, at
+/// low spp where pixel estimates are skewed, flag unbiased samplers.
+pub fn bias_check(
+    mean: &[Rgb],
+    mean_variance: &[Rgb],
+    reference: &[Rgb],
+    reference_variance: &[Rgb],
+    alpha: f64,
+) -> BiasCheck {
+    let (mut sum_r, mut sum_w, mut var) = (0.0f64, 0.0f64, 0.0f64);
+    for i in 0..mean.len() {
+        let r: f64 = (0..3).map(|c| (mean[i][c] - reference[i][c]) as f64).sum::<f64>() / 3.0;
+        let sd: f64 =
+            (0..3).map(|c| ((mean_variance[i][c] + reference_variance[i][c]) as f64).max(0.0).sqrt()).sum::<f64>()
+                / 3.0;
+        let w = 1.0 / ((0..3).map(|c| reference[i][c].abs() as f64).sum::<f64>() / 3.0 + 0.05);
+        sum_r += r;
+        sum_w += w * r;
+        var += w * w * sd * sd;
+    }
+    let z = if var > 0.0 {
+        sum_w / var.sqrt()
+    } else if sum_w == 0.0 {
+        0.0
+    } else {
+        f64::INFINITY.copysign(sum_w)
+    };
+    let p = normal_p_value(z);
+    BiasCheck { mean_difference: sum_r / mean.len().max(1) as f64, z, p, flagged: p < alpha }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn metrics_match_hand_computed_values() {
+        let reference = [Rgb::new(1.0, 0.0, 0.5), Rgb::new(0.0, 2.0, 1.0)];
+        let image = [Rgb::new(1.5, 0.0, 0.5), Rgb::new(0.0, 2.0, 0.0)];
+        let m = error_metrics(&image, &reference).unwrap();
+        // Squared errors 0.25 (R of pixel 0) and 1 (B of pixel 1) over 6 values.
+        assert!((m.mse - 1.25 / 6.0).abs() < 1e-12);
+        let rel = 0.25 / (1.0 + 0.01) + 1.0 / (1.0 + 0.01);
+        assert!((m.rel_mse - rel / 6.0).abs() < 1e-12);
+        let map = relative_error_map(&image, &reference);
+        assert!((map[0] as f64 - (0.25 / 1.01 / 3.0f64).sqrt()).abs() < 1e-6);
+        assert!((efficiency(0.5, 4.0) - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn an_image_against_itself_has_zero_error_and_no_bias() {
+        let img: Vec<Rgb> = (0..100).map(|i| Rgb::splat(i as f32 * 0.1)).collect();
+        assert_eq!(error_metrics(&img, &img).unwrap(), ErrorMetrics { mse: 0.0, rel_mse: 0.0 });
+        let zero = vec![Rgb::ZERO; 100];
+        let b = bias_check(&img, &zero, &img, &zero, 0.001);
+        assert!(!b.flagged && b.z == 0.0);
+        assert!(error_metrics(&img, &img[..50]).is_err());
+    }
+
+    #[test]
+    fn bias_check_flags_a_scaled_image_but_not_noise() {
+        // Deterministic "noise" with known variance around a smooth image.
+        let n = 4000;
+        let truth: Vec<Rgb> = (0..n).map(|i| Rgb::splat(0.5 + 0.3 * (i as f32 * 0.01).sin())).collect();
+        let sigma = 0.05f32;
+        let noise = |i: usize| sigma * 3f32.sqrt() * (2.0 * ((i as f32 * 0.754_877_7).fract()) - 1.0);
+        let noisy: Vec<Rgb> = truth.iter().enumerate().map(|(i, t)| *t + Rgb::splat(noise(i))).collect();
+        let var = vec![Rgb::splat(sigma * sigma); n];
+        let zero = vec![Rgb::ZERO; n];
+        assert!(!bias_check(&noisy, &var, &truth, &zero, 0.001).flagged);
+        let biased: Vec<Rgb> = noisy.iter().map(|x| *x * 1.02).collect();
+        let b = bias_check(&biased, &var, &truth, &zero, 0.001);
+        assert!(b.flagged && b.z > 0.0, "{b:?}");
+    }
+
+    #[test]
+    fn p_values_are_right() {
+        assert!((normal_p_value(1.959_964) - 0.05).abs() < 1e-6);
+        assert!((normal_p_value(3.290_527) - 0.001).abs() < 1e-6);
+        assert!((normal_p_value(0.0) - 1.0).abs() < 1e-6);
+    }
+}

@@ -1,0 +1,192 @@
+//! What `compare` found, as data (`report.json`), as a table (terminal and `report.md`).
+
+use serde::Serialize;
+
+use super::metrics::BiasCheck;
+
+/// Mean and standard deviation of a quantity over seeds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Stat {
+    /// Mean.
+    pub mean: f64,
+    /// Sample standard deviation (0 for one seed).
+    pub std: f64,
+}
+
+impl Stat {
+    /// Mean and standard deviation of `xs` (non-empty).
+    pub fn of(xs: &[f64]) -> Self {
+        let n = xs.len() as f64;
+        let mean = xs.iter().sum::<f64>() / n;
+        let var = if xs.len() > 1 { xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0) } else { 0.0 };
+        Self { mean, std: var.sqrt() }
+    }
+}
+
+/// One render of one sampler with one seed.
+#[derive(Clone, Debug, Serialize)]
+pub struct RunResult {
+    /// Seed.
+    pub seed: u64,
+    /// Render seconds (scene loading and sampler build excluded).
+    pub seconds: f64,
+    /// Samples per pixel reached.
+    pub spp: u32,
+    /// MSE against the reference.
+    pub mse: f64,
+    /// relMSE against the reference.
+    pub rel_mse: f64,
+    /// 1/(relMSE · seconds).
+    pub efficiency: f64,
+    /// (seconds, relMSE) after each pass.
+    pub convergence: Vec<(f64, f64)>,
+}
+
+/// Everything measured for one sampler.
+#[derive(Clone, Debug, Serialize)]
+pub struct SamplerResult {
+    /// Sampler name.
+    pub sampler: String,
+    /// Light-sampler build seconds.
+    pub build_seconds: f64,
+    /// Light-sampler memory in bytes.
+    pub memory_bytes: usize,
+    /// Render seconds over seeds.
+    pub seconds: Stat,
+    /// spp over seeds.
+    pub spp: Stat,
+    /// MSE over seeds.
+    pub mse: Stat,
+    /// relMSE over seeds.
+    pub rel_mse: Stat,
+    /// Efficiency over seeds.
+    pub efficiency: Stat,
+    /// Mean efficiency divided by the best sampler's.
+    pub efficiency_vs_best: f64,
+    /// Does the mean over seeds agree with the reference?
+    pub bias: BiasCheck,
+    /// Each seed's run.
+    pub runs: Vec<RunResult>,
+    /// Files written for it (render of the first seed, its error map).
+    pub files: Vec<String>,
+}
+
+/// How the reference was obtained.
+#[derive(Clone, Debug, Serialize)]
+pub struct ReferenceInfo {
+    /// Its file.
+    pub path: String,
+    /// Rendered by myriad (sampler, spp, seed), or given by the user.
+    pub origin: String,
+    /// True when a cached reference from an earlier run was reused.
+    pub reused: bool,
+    /// Seconds spent rendering it now (0 when given or reused).
+    pub seconds: f64,
+}
+
+/// The whole comparison.
+#[derive(Clone, Debug, Serialize)]
+pub struct CompareReport {
+    /// Scene file.
+    pub scene: String,
+    /// "equal spp (N)" or "equal time (S s)".
+    pub mode: String,
+    /// Image width and height.
+    pub resolution: [u32; 2],
+    /// Maximum scattering events.
+    pub max_depth: u32,
+    /// Render threads.
+    pub threads: usize,
+    /// The reference.
+    pub reference: ReferenceInfo,
+    /// Per sampler, in the order asked.
+    pub samplers: Vec<SamplerResult>,
+    /// Other files written (contact sheet, plot, reports).
+    pub files: Vec<String>,
+}
+
+/// Formats a number with 4 significant digits (scientific below 1e-3).
+pub fn num(x: f64) -> String {
+    if x == 0.0 {
+        "0".into()
+    } else if x.fract() == 0.0 && x.abs() < 1e9 {
+        format!("{x:.0}")
+    } else if x.is_infinite() {
+        "inf".into()
+    } else if x.abs() < 1e-3 || x.abs() >= 1e5 {
+        format!("{x:.3e}")
+    } else {
+        format!("{:.*}", (3 - x.abs().log10().floor() as i32).max(0) as usize, x)
+    }
+}
+
+fn pm(s: &Stat, seeds: usize) -> String {
+    if seeds > 1 && s.std > 0.0 { format!("{} ± {}", num(s.mean), num(s.std)) } else { num(s.mean) }
+}
+
+impl CompareReport {
+    /// The results table in Markdown (also what the terminal shows).
+    pub fn table(&self) -> String {
+        let seeds = self.samplers.first().map_or(1, |s| s.runs.len());
+        let mut t = String::from(
+            "| sampler | spp | time (s) | MSE | relMSE | efficiency | vs best | build (s) | memory (B) | bias z |\n\
+             |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        );
+        for s in &self.samplers {
+            t += &format!(
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {}{} |\n",
+                s.sampler,
+                pm(&s.spp, seeds),
+                pm(&s.seconds, seeds),
+                pm(&s.mse, seeds),
+                pm(&s.rel_mse, seeds),
+                pm(&s.efficiency, seeds),
+                num(s.efficiency_vs_best),
+                num(s.build_seconds),
+                s.memory_bytes,
+                num(s.bias.z),
+                if s.bias.flagged { " **biased?**" } else { "" }
+            );
+        }
+        t
+    }
+
+    /// `report.md`: settings, the table, the contact sheet and the plot.
+    pub fn markdown(&self, sheet: &str, plot: &str) -> String {
+        let mut md = format!("# myriad compare: {}\n\n", self.scene);
+        md += &format!(
+            "{}, {} × {} px, max depth {}, {} threads, {} seed(s). Reference: `{}` ({}{}).\n\n",
+            self.mode,
+            self.resolution[0],
+            self.resolution[1],
+            self.max_depth,
+            self.threads,
+            self.samplers.first().map_or(0, |s| s.runs.len()),
+            self.reference.path,
+            self.reference.origin,
+            if self.reference.reused { ", reused from an earlier run" } else { "" }
+        );
+        md += &self.table();
+        md += "\nrelMSE = mean((x − ref)² / (ref² + 0.01)); efficiency = 1 / (relMSE · render seconds); \
+               `vs best` divides by the best mean efficiency. A bias |z| beyond the 0.1% level \
+               (Šidák-corrected over samplers) is flagged: the mean over seeds disagrees with the reference.\n\n";
+        md += &format!("![renders (top) and relative error (bottom)]({sheet})\n\n![relMSE against time]({plot})\n");
+        md
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_keep_four_significant_digits() {
+        assert_eq!(num(0.012345), "0.01235");
+        assert_eq!(num(123.456), "123.5");
+        assert_eq!(num(1.5e-5), "1.500e-5");
+        assert_eq!(num(0.0), "0");
+        assert_eq!(num(64.0), "64");
+        let s = Stat::of(&[1.0, 2.0, 3.0]);
+        assert_eq!((s.mean, s.std), (2.0, 1.0));
+    }
+}
