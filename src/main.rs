@@ -205,7 +205,7 @@ fn run(cli: Cli) -> myriad::Result<()> {
                 exposure: a.exposure,
                 progress: !a.quiet,
             };
-            println!("{}", commands::render::render(&opts)?);
+            say(commands::render::render(&opts)?);
         }
         Command::Compare(a) => {
             let out_dir = a.out_dir.unwrap_or_else(|| {
@@ -233,26 +233,33 @@ fn run(cli: Cli) -> myriad::Result<()> {
                 progress: !a.quiet,
             };
             let report = compare(&opts)?;
-            println!("{}", report.table());
+            say(report.table());
             for s in report.samplers.iter().filter(|s| s.bias.flagged) {
-                println!(
+                say(format!(
                     "warning: {} disagrees with the reference (z = {:.1}): biased sampler or unconverged reference",
                     s.sampler, s.bias.z
-                );
+                ));
             }
-            println!(
+            say(format!(
                 "wrote {} (report.md, report.json, contact-sheet.png, convergence.svg, per-sampler EXR and error maps)",
                 out_dir.display()
-            );
+            ));
         }
         Command::Diff { image, reference, out } => {
-            println!("{}", diff(&image, &reference, out.as_deref())?);
+            say(diff(&image, &reference, out.as_deref())?);
         }
         Command::Info { scene, camera } => {
-            print!("{}", info(scene.as_deref(), &BuildOptions { resolution: None, camera })?);
+            say(info(scene.as_deref(), &BuildOptions { resolution: None, camera })?);
         }
     }
     Ok(())
+}
+
+/// Prints to stdout; a closed pipe (`myriad … | head`) ends the output quietly instead of
+/// panicking as `println!` does.
+fn say(text: impl std::fmt::Display) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stdout(), "{text}");
 }
 
 fn main() -> ExitCode {

@@ -1,15 +1,16 @@
-//! Counter-based random numbers: every number is a pure function of its address.
+//! Random numbers with addresses: every number is a pure function of (seed, pixel, sample
+//! index, bounce, [`Dim`], sub-index).
 //!
-//! Owns: [`SampleStream`], which hashes (seed, pixel, sample index, bounce, [`Dim`], sub-index)
-//! into a uniform number in `[0,1)`. There is no state to advance, so results do not depend
-//! on thread count, tile order or on how many numbers another code path consumed (pbrt-v4
-//! `IndependentSampler`, Cycles `path_rng_1D`). Depends on `math` only.
-//!
-//! The hash is the 64-bit finaliser of MurmurHash3 (`fmix64`) applied twice: once to fold the
-//! pixel-sample key, once per number. Its output passes PractRand far beyond what a render
-//! consumes, and each number costs a handful of multiply-xor-shift steps.
+//! Owns: [`SampleStream`]. There is no state to advance, so results do not depend on thread
+//! count, tile order or on how many numbers another code path consumed (pbrt-v4 samplers,
+//! Cycles `path_rng_1D`). Each (seed, pixel, bounce, dimension) selects a differently
+//! scrambled Sobol sequence (`sobol.rs`) and the sample index is the position in it: the
+//! samples of a pixel are stratified in every dimension and every pair of 2D dimensions,
+//! which independent random numbers are not. Seeds are mixed with MurmurHash3's `fmix64`.
+//! Depends on `math` only.
 
 mod dimension;
+mod sobol;
 
 pub use dimension::Dim;
 
@@ -30,6 +31,7 @@ pub fn fmix64(mut k: u64) -> u64 {
 #[derive(Clone, Copy, Debug)]
 pub struct SampleStream {
     key: u64,
+    sample: u32,
 }
 
 impl SampleStream {
@@ -37,13 +39,15 @@ impl SampleStream {
     #[inline]
     pub fn new(seed: u64, pixel: u64, sample: u64) -> Self {
         let k = fmix64(seed ^ 0x9e37_79b9_7f4a_7c15);
-        let k = fmix64(k ^ pixel.wrapping_mul(0xd1b5_4a32_d192_ed03));
-        let k = fmix64(k ^ sample.wrapping_mul(0x8cb9_2ba7_2f3d_8dd7));
-        Self { key: k }
+        let key = fmix64(k ^ pixel.wrapping_mul(0xd1b5_4a32_d192_ed03));
+        // Beyond 2^32 samples per pixel the sequence repeats with a fresh scramble.
+        let key = fmix64(key ^ (sample >> 32));
+        Self { key, sample: sample as u32 }
     }
 
+    /// The scramble seed of one dimension.
     #[inline]
-    fn bits(&self, bounce: u32, slot: u64, sub: u32) -> u64 {
+    fn seed(&self, bounce: u32, slot: u64, sub: u32) -> u64 {
         let addr = ((bounce as u64) * Dim::SLOTS + slot) | ((sub as u64) << 32);
         fmix64(self.key ^ addr.wrapping_mul(0x9e37_79b9_7f4a_7c15))
     }
@@ -52,20 +56,15 @@ impl SampleStream {
     /// same dimension (the `all` estimator's per-light points).
     #[inline]
     pub fn get_1d(&self, bounce: u32, dim: Dim, sub: u32) -> f32 {
-        to_unit(self.bits(bounce, dim as u64, sub))
+        sobol::to_unit32(sobol::sample_1d(self.sample, self.seed(bounce, dim as u64, sub)))
     }
 
-    /// Two numbers in `[0,1)²` for a 2D `dim`.
+    /// Two numbers in `[0,1)²` for a 2D `dim`, stratified together.
     #[inline]
     pub fn get_2d(&self, bounce: u32, dim: Dim, sub: u32) -> Vec2 {
-        Vec2::new(to_unit(self.bits(bounce, dim as u64, sub)), to_unit(self.bits(bounce, dim as u64 + 1, sub)))
+        let (x, y) = sobol::sample_2d(self.sample, self.seed(bounce, dim as u64, sub));
+        Vec2::new(sobol::to_unit32(x), sobol::to_unit32(y))
     }
-}
-
-/// Top 24 bits of a hash as a float in `[0,1)` (every value exactly representable).
-#[inline]
-fn to_unit(h: u64) -> f32 {
-    (h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
 }
 
 #[cfg(test)]

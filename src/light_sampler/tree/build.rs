@@ -50,6 +50,8 @@ pub struct BinNode {
     pub bounds: LightBounds,
     /// Its two children.
     pub children: [Child; 2],
+    /// Lights below it.
+    pub count: u32,
 }
 
 /// Direction-cone measure M_Ω (Conty & Kulla eq. 1).
@@ -224,7 +226,7 @@ pub fn build_range(
     let ((lc, lb), (rc, rb)) =
         if m > PARALLEL_BUILD { rayon::join(build_left, build_right) } else { (build_left(), build_right()) };
     let bounds = lb.union(&rb);
-    *node_slot = BinNode { bounds, children: [lc, rc] };
+    *node_slot = BinNode { bounds, children: [lc, rc], count: m as u32 };
     (Child::Node(offset + mid as u32 - 1), bounds)
 }
 
@@ -235,7 +237,7 @@ pub fn build(items: &mut [Item], max_depth: u32) -> (Vec<BinNode>, Child, LightB
     let n = items.len();
     let balanced = usize::BITS - (n - 1).leading_zeros(); // ⌈log2 n⌉
     let median_depth = max_depth.saturating_sub(balanced + 1);
-    let mut slots = vec![BinNode { bounds: EMPTY, children: [Child::Item(0); 2] }; n - 1];
+    let mut slots = vec![BinNode { bounds: EMPTY, children: [Child::Item(0); 2], count: 0 }; n - 1];
     let (root, bounds) = build_range(items, 0, &mut slots, 0, median_depth);
     (slots, root, bounds)
 }
