@@ -1,49 +1,74 @@
 #![allow(missing_docs)] // criterion_group! generates undocumented items
-//! Cost of one light selection (`sample` + the `pmf` MIS needs) per sampler, 10² to 10⁶
-//! lights on a grid (`cargo bench --bench light_samplers`).
+//! Light selection: the cost of one `sample` + the `pmf` MIS needs, per sampler, at 10² to 10⁶
+//! lights; and the light tree's build time (`cargo bench --bench light_samplers`).
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use myriad::light::{AreaEmission, Light, LightId, QuadLight};
-use myriad::light_sampler::{LightSampler, LightSamplerKind, LightStrategy, ShadingContext};
+use myriad::light::{AreaEmission, Light, LightId, TriangleLight};
+use myriad::light_sampler::{LightSampler, LightSamplerKind, LightStrategy, LightTree, ShadingContext};
 use myriad::math::{Rgb, Vec3A};
+use myriad::sampling::{Dim, SampleStream};
 use std::hint::black_box;
 
-/// `n` small quads on a ceiling, powers spread over two decades.
-fn grid(n: usize) -> Vec<Light> {
-    let side = (n as f32).sqrt().ceil() as usize;
+/// `n` small emissive triangles scattered over a 20 m × 20 m ceiling at heights 2–4 m, facing
+/// down with some tilt, powers spread over three decades: the shape of a large lighting rig.
+pub fn triangles(n: usize) -> Vec<Light> {
     (0..n)
         .map(|i| {
-            let (x, z) = ((i % side) as f32 / side as f32, (i / side) as f32 / side as f32);
-            let s = 0.5 / side as f32;
-            let power = 10f32.powf(2.0 * ((i * 7919) % 1000) as f32 / 1000.0);
-            let e = AreaEmission { radiance: Rgb::splat(power), two_sided: false };
-            Light::Quad(
-                QuadLight::new(Vec3A::new(x * 2.0 - 1.0, 2.0, z * 2.0 - 1.0), Vec3A::Z * s, Vec3A::X * s, e).unwrap(),
-            )
+            let s = SampleStream::new(7, i as u64, 0);
+            let p = s.get_2d(0, Dim::LightPoint, 0);
+            let q = s.get_2d(0, Dim::BsdfDirection, 0);
+            let c = Vec3A::new(p.x * 20.0 - 10.0, 2.0 + 2.0 * q.x, p.y * 20.0 - 10.0);
+            let size = 0.2 / (n as f32).sqrt().max(1.0) * 10.0;
+            let tilt = (q.y - 0.5) * size;
+            let v = [c, c + Vec3A::new(size, tilt, 0.0), c + Vec3A::new(0.0, -tilt, size)];
+            let power = 10f32.powf(3.0 * s.get_1d(0, Dim::LightSelect, 0));
+            TriangleLight::new(v, AreaEmission { radiance: Rgb::splat(power), two_sided: false })
+                .map(Light::Triangle)
+                .unwrap()
         })
         .collect()
 }
 
-fn bench(c: &mut Criterion) {
+fn selection(c: &mut Criterion) {
     let mut group = c.benchmark_group("light_select");
     for n in [100usize, 10_000, 1_000_000] {
-        let lights = grid(n);
-        for kind in [LightSamplerKind::Uniform, LightSamplerKind::Power] {
-            let LightStrategy::One(s) = LightStrategy::build(kind, &lights, 2.0) else { unreachable!() };
-            let ctx = ShadingContext { p: Vec3A::new(0.1, 0.5, 0.2), n: Vec3A::Y };
-            let mut k = 0u32;
+        let lights = triangles(n);
+        for kind in
+            [LightSamplerKind::Uniform, LightSamplerKind::Power, LightSamplerKind::Local, LightSamplerKind::Tree]
+        {
+            if kind == LightSamplerKind::Local && n > 10_000 {
+                group.sample_size(10);
+            }
+            let LightStrategy::One(s) = LightStrategy::build(kind, &lights, 20.0) else { unreachable!() };
+            let mut k = 0u64;
             group.bench_with_input(BenchmarkId::new(kind.name(), n), &n, |b, _| {
                 b.iter(|| {
-                    k = k.wrapping_add(0x9e37_79b9);
-                    let u = (k >> 8) as f32 / (1u32 << 24) as f32;
-                    let picked = s.sample(black_box(&ctx), u).unwrap();
-                    black_box(s.pmf(&ctx, LightId(picked.light.0)))
+                    // A fresh shading point on the floor each call, as in a render.
+                    k += 1;
+                    let st = SampleStream::new(3, k, 0);
+                    let p = st.get_2d(0, Dim::PixelJitter, 0);
+                    let ctx = ShadingContext { p: Vec3A::new(p.x * 20.0 - 10.0, 0.0, p.y * 20.0 - 10.0), n: Vec3A::Y };
+                    let picked = s.sample(black_box(&ctx), st.get_1d(0, Dim::LightSelect, 0));
+                    black_box(picked.map(|x| s.pmf(&ctx, LightId(x.light.0))))
                 })
             });
+            group.sample_size(100);
         }
     }
     group.finish();
 }
 
-criterion_group!(benches, bench);
+fn tree_build(c: &mut Criterion) {
+    let mut group = c.benchmark_group("tree_build");
+    group.sample_size(10);
+    for n in [1_000usize, 100_000, 1_000_000] {
+        let lights = triangles(n);
+        group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| LightTree::new(black_box(&lights)).stats().nodes)
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, selection, tree_build);
 criterion_main!(benches);
