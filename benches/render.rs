@@ -12,7 +12,7 @@ use std::path::Path;
 
 fn scene(name: &str, res: UVec2) -> myriad::scene::Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
-    load_scene(Some(&path), &BuildOptions { resolution: Some(res), camera: None }).unwrap().scene
+    load_scene(Some(&path), &BuildOptions { resolution: Some(res), camera: None }.into()).unwrap().scene
 }
 
 fn bench(c: &mut Criterion) {
@@ -36,7 +36,7 @@ fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("scene_build");
     group.sample_size(10);
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-320x320.ron");
-    let desc = myriad::io::load_scene(&path).unwrap();
+    let desc = myriad::io::load_scene(&path, &Default::default()).unwrap();
     group.bench_function("cornell-320x320 (102400 lamps)", |b| {
         b.iter(|| myriad::scene::build(desc.clone(), &BuildOptions::default()).unwrap().stats.triangles)
     });

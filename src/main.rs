@@ -7,8 +7,9 @@ use std::time::Duration;
 use clap::{Args, Parser, Subcommand};
 use myriad::commands::compare::{CompareOptions, compare};
 use myriad::commands::diff::diff;
-use myriad::commands::{self, info::info, render::RenderOptions};
+use myriad::commands::{self, SceneOptions, info::info, render::RenderOptions};
 use myriad::film::AovSet;
+use myriad::io::LoadOptions;
 use myriad::light_sampler::LightSamplerKind;
 use myriad::math::UVec2;
 use myriad::render::Budget;
@@ -16,7 +17,7 @@ use myriad::scene::BuildOptions;
 
 /// myriad: a path tracer for scenes lit by very many lights.
 ///
-/// Renders .ron scenes (with procedural light grids) and .obj files to EXR, choosing
+/// Renders .ron scenes (with procedural light grids), glTF (.gltf, .glb) and .obj files to EXR, choosing
 /// lights with one of several samplers (all, uniform, power, local, tree), and compares the
 /// samplers on your own scenes (`myriad compare`).
 #[derive(Parser)]
@@ -56,17 +57,19 @@ enum Command {
     },
     /// Load a scene and report what it holds: triangles, lights, power, build times, memory.
     Info {
-        /// Scene file (.ron or .obj); default: the built-in Cornell box.
+        /// Scene file (.ron, .obj, .gltf or .glb); default: the built-in Cornell box.
         scene: Option<PathBuf>,
         /// Camera to use, by name.
         #[arg(long)]
         camera: Option<String>,
+        #[command(flatten)]
+        load: LoadArgs,
     },
 }
 
 #[derive(Args)]
 struct RenderArgs {
-    /// Scene file (.ron or .obj); default: the built-in Cornell box.
+    /// Scene file (.ron, .obj, .gltf or .glb); default: the built-in Cornell box.
     scene: Option<PathBuf>,
     /// Output EXR.
     #[arg(short, long, default_value = "myriad.exr")]
@@ -110,11 +113,13 @@ struct RenderArgs {
     /// Hide the progress bar.
     #[arg(long, short)]
     quiet: bool,
+    #[command(flatten)]
+    load: LoadArgs,
 }
 
 #[derive(Args)]
 struct CompareArgs {
-    /// Scene file (.ron or .obj).
+    /// Scene file (.ron, .obj, .gltf or .glb).
     scene: PathBuf,
     /// Samplers to compare, comma-separated.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "uniform,power,local,tree")]
@@ -158,6 +163,28 @@ struct CompareArgs {
     /// Hide the progress bars.
     #[arg(long, short)]
     quiet: bool,
+    #[command(flatten)]
+    load: LoadArgs,
+}
+
+/// Options for reading scene files.
+#[derive(Args)]
+struct LoadArgs {
+    /// glTF scene to load, by index (default: the file's default scene, else its first).
+    #[arg(long)]
+    gltf_scene: Option<usize>,
+    /// Factor from glTF punctual light units (cd, lux) to W/sr and W/m² [default: 1/683, as
+    /// Blender's exporter writes them in its "Standard" lighting mode; use 1 for files whose
+    /// intensities are already radiometric].
+    #[arg(long)]
+    punctual_scale: Option<f32>,
+}
+
+impl LoadArgs {
+    fn options(&self) -> LoadOptions {
+        let d = LoadOptions::default();
+        LoadOptions { gltf_scene: self.gltf_scene, punctual_scale: self.punctual_scale.unwrap_or(d.punctual_scale) }
+    }
 }
 
 fn parse_seconds(s: &str) -> Result<Duration, String> {
@@ -204,6 +231,7 @@ fn run(cli: Cli) -> myriad::Result<()> {
                 },
                 exposure: a.exposure,
                 progress: !a.quiet,
+                load: a.load.options(),
             };
             say(commands::render::render(&opts)?);
         }
@@ -231,6 +259,7 @@ fn run(cli: Cli) -> myriad::Result<()> {
                 camera: a.camera,
                 exposure: a.exposure,
                 progress: !a.quiet,
+                load: a.load.options(),
             };
             let report = compare(&opts)?;
             say(report.table());
@@ -248,8 +277,9 @@ fn run(cli: Cli) -> myriad::Result<()> {
         Command::Diff { image, reference, out } => {
             say(diff(&image, &reference, out.as_deref())?);
         }
-        Command::Info { scene, camera } => {
-            say(info(scene.as_deref(), &BuildOptions { resolution: None, camera })?);
+        Command::Info { scene, camera, load } => {
+            let options = SceneOptions { load: load.options(), build: BuildOptions { resolution: None, camera } };
+            say(info(scene.as_deref(), &options)?);
         }
     }
     Ok(())

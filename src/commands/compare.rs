@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use super::render::progress_bar;
-use super::{DEFAULT_MAX_DEPTH, load_scene};
+use super::{DEFAULT_MAX_DEPTH, SceneOptions, load_scene};
 use crate::compare::images::{SheetColumn, contact_sheet, error_picture, preview_picture};
 use crate::compare::metrics::{bias_check, efficiency, error_metrics, relative_error_map};
 use crate::compare::plot::{Curve, convergence_svg};
@@ -55,6 +55,8 @@ pub struct CompareOptions {
     pub max_depth: Option<u32>,
     /// Camera name.
     pub camera: Option<String>,
+    /// How to read the scene file.
+    pub load: crate::io::LoadOptions,
     /// Exposure of the previews, stops.
     pub exposure: f32,
     /// Show progress bars.
@@ -163,8 +165,11 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
         return Err(Error::Usage("give at least one sampler and one seed".into()));
     }
     crate::io::ensure_dir(&opts.out_dir)?;
-    let loaded =
-        load_scene(Some(&opts.scene), &BuildOptions { resolution: opts.resolution, camera: opts.camera.clone() })?;
+    let scene_options = SceneOptions {
+        load: opts.load,
+        build: BuildOptions { resolution: opts.resolution, camera: opts.camera.clone() },
+    };
+    let loaded = load_scene(Some(&opts.scene), &scene_options)?;
     let scene = &loaded.scene;
     let max_depth = opts.max_depth.or(scene.render.max_depth).unwrap_or(DEFAULT_MAX_DEPTH);
     let size = scene.camera.resolution();

@@ -4,10 +4,9 @@ use std::collections::BTreeMap;
 use std::fmt;
 use std::path::Path;
 
-use super::{LoadedScene, human_bytes, human_duration, load_scene};
+use super::{LoadedScene, SceneOptions, human_bytes, human_duration, load_scene};
 use crate::error::Result;
 use crate::light_sampler::{LightTree, TreeStats};
-use crate::scene::BuildOptions;
 
 /// Everything `info` reports.
 pub struct InfoReport {
@@ -18,7 +17,7 @@ pub struct InfoReport {
 }
 
 /// Loads and builds the scene and its light tree, and gathers their statistics.
-pub fn info(path: Option<&Path>, options: &BuildOptions) -> Result<InfoReport> {
+pub fn info(path: Option<&Path>, options: &SceneOptions) -> Result<InfoReport> {
     let loaded = load_scene(path, options)?;
     let tree = (!loaded.scene.lights.is_empty()).then(|| LightTree::new(&loaded.scene.lights).stats());
     Ok(InfoReport { loaded, tree })

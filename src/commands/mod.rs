@@ -14,6 +14,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use crate::error::Result;
+use crate::io::LoadOptions;
 use crate::scene::{self, BuildOptions, Scene, SceneDescription};
 
 /// The scene built into the binary: the seed's Cornell box with a 5 × 5 ceiling grid.
@@ -28,6 +29,21 @@ pub const DEFAULT_SPP: u32 = 64;
 /// bounces, like the reference renders).
 pub const DEFAULT_MAX_DEPTH: u32 = 8;
 
+/// How to read and build a scene.
+#[derive(Clone, Debug, Default)]
+pub struct SceneOptions {
+    /// Reading the file (glTF scene, punctual light units).
+    pub load: LoadOptions,
+    /// Building it (resolution, camera).
+    pub build: BuildOptions,
+}
+
+impl From<BuildOptions> for SceneOptions {
+    fn from(build: BuildOptions) -> Self {
+        Self { build, load: LoadOptions::default() }
+    }
+}
+
 /// A scene loaded and built, with how long each stage took.
 pub struct LoadedScene {
     /// The scene.
@@ -37,19 +53,19 @@ pub struct LoadedScene {
 }
 
 /// Reads the scene at `path` (or the built-in default when `None`).
-pub fn load_description(path: Option<&Path>) -> Result<SceneDescription> {
+pub fn load_description(path: Option<&Path>, options: &LoadOptions) -> Result<SceneDescription> {
     match path {
-        Some(p) => crate::io::load_scene(p),
-        None => crate::io::ron::parse(DEFAULT_SCENE, DEFAULT_SCENE_NAME, Path::new(".")),
+        Some(p) => crate::io::load_scene(p, options),
+        None => crate::io::ron::parse(DEFAULT_SCENE, DEFAULT_SCENE_NAME, Path::new("."), options),
     }
 }
 
 /// Loads and builds a scene (BVH built in the current rayon pool).
-pub fn load_scene(path: Option<&Path>, options: &BuildOptions) -> Result<LoadedScene> {
+pub fn load_scene(path: Option<&Path>, options: &SceneOptions) -> Result<LoadedScene> {
     let start = Instant::now();
-    let desc = load_description(path)?;
+    let desc = load_description(path, &options.load)?;
     let load_time = start.elapsed();
-    let scene = scene::build(desc, options)?;
+    let scene = scene::build(desc, &options.build)?;
     Ok(LoadedScene { scene, load_time })
 }
 

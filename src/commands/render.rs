@@ -7,8 +7,8 @@ use std::time::{Duration, Instant};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::{
-    DEFAULT_MAX_DEPTH, DEFAULT_SCENE_NAME, DEFAULT_SPP, LoadedScene, human_bytes, human_duration, human_rate,
-    load_scene,
+    DEFAULT_MAX_DEPTH, DEFAULT_SCENE_NAME, DEFAULT_SPP, LoadedScene, SceneOptions, human_bytes, human_duration,
+    human_rate, load_scene,
 };
 use crate::error::{Error, Result};
 use crate::film::AovSet;
@@ -47,6 +47,8 @@ pub struct RenderOptions {
     pub direct_only: bool,
     /// Camera name.
     pub camera: Option<String>,
+    /// How to read the scene file.
+    pub load: crate::io::LoadOptions,
     /// Extra EXR channels.
     pub aovs: AovSet,
     /// PNG exposure in stops.
@@ -133,8 +135,11 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
     if let Some(p) = &png {
         crate::io::check_writable(p)?;
     }
-    let loaded =
-        load_scene(opts.scene.as_deref(), &BuildOptions { resolution: opts.resolution, camera: opts.camera.clone() })?;
+    let scene_options = SceneOptions {
+        load: opts.load,
+        build: BuildOptions { resolution: opts.resolution, camera: opts.camera.clone() },
+    };
+    let loaded = load_scene(opts.scene.as_deref(), &scene_options)?;
     let (settings, sampler) = resolve(opts, &loaded)?;
     let scene = &loaded.scene;
 

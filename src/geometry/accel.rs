@@ -1,35 +1,38 @@
-//! The ray-query acceleration structure: an obvhs compressed 8-wide BVH over all triangles.
+//! The ray-query acceleration structures: obvhs compressed 8-wide BVHs, two levels when
+//! meshes are instanced.
 //!
-//! Owns: building the CWBVH (medium preset: PLOC + reinsertion; crates.md measured it as the
-//! best build/trace trade-off here), the direct-layout triangle array it indexes, closest-hit
-//! and occlusion queries. This is the only file that imports obvhs.
+//! Owns: one [`Blas`] per geometry block (the flattened world-space triangles, and each mesh
+//! that several instances share, in object space), [`Instance`] placements, a top-level
+//! CWBVH over the instances when there is more than one, closest-hit and occlusion queries
+//! with an acceptance test (alpha cut-outs). Medium build preset: PLOC + reinsertion,
+//! crates.md measured it as the best build/trace trade-off here. This is the only file that
+//! imports obvhs.
 //!
-//! The triangles are stored in BVH order ("direct layout"), so the slot obvhs hands to the
-//! intersection closure is our triangle index; the caller reorders its per-triangle data with
-//! the permutation [`Accel::build`] returns.
+//! A BLAS stores its triangles in BVH order ("direct layout"), so the slot obvhs hands to the
+//! intersection closure is the triangle index; callers reorder per-triangle data with the
+//! permutation [`Blas::build`] returns. Instanced rays are moved into object space without
+//! normalising the direction, so hit distances `t` stay comparable across instances.
 
 use std::time::{Duration, Instant};
 
-use obvhs::{BvhBuildParams, cwbvh::CwBvh, cwbvh::builder::build_cwbvh_from_tris, ray::RayHit, triangle::Triangle};
+use obvhs::{
+    Boundable, BvhBuildParams,
+    aabb::Aabb,
+    cwbvh::CwBvh,
+    cwbvh::builder::{build_cwbvh, build_cwbvh_from_tris},
+    ray::RayHit,
+    triangle::Triangle,
+};
 
 use super::Ray;
-use crate::math::Vec3A;
-
-/// Sizes and timings of a built [`Accel`].
-#[derive(Clone, Copy, Debug, Default)]
-pub struct AccelStats {
-    /// Wall time of the build.
-    pub build_time: Duration,
-    /// Number of BVH nodes.
-    pub nodes: usize,
-    /// Bytes of nodes, triangles and index tables.
-    pub memory_bytes: usize,
-}
+use crate::math::{Mat3, Mat4, Vec3A};
 
 /// The raw result of a closest-hit query.
 #[derive(Clone, Copy, Debug)]
 pub struct RawHit {
-    /// Triangle index (BVH order).
+    /// Instance hit.
+    pub instance: u32,
+    /// Triangle within the instance's BLAS (BVH order).
     pub tri: u32,
     /// Ray parameter.
     pub t: f32,
@@ -39,14 +42,16 @@ pub struct RawHit {
     pub b2: f32,
 }
 
-/// CWBVH plus its triangles in BVH order.
-pub struct Accel {
-    bvh: Option<CwBvh>,
-    tris: Vec<Triangle>,
-    stats: AccelStats,
+/// An obvhs ray. Direction components of −0.0 are turned into +0.0: obvhs takes the ray's
+/// octant from `d < 0` (false for −0.0) but its inverse from the sign bit (−∞-like for
+/// −0.0), and with the two disagreeing the CWBVH node test misses every box (found by
+/// `negative_zero_directions_still_hit`).
+#[inline(always)]
+fn obvhs_ray(o: Vec3A, d: Vec3A, t_max: f32) -> obvhs::ray::Ray {
+    obvhs::ray::Ray::new(o, d + Vec3A::ZERO, 0.0, t_max)
 }
 
-/// Möller-Trumbore: (t, b1, b2) when the ray meets the triangle within `[tmin, tmax]`.
+/// Möller-Trumbore: (t, b1, b2) when the ray meets the triangle within `(tmin, tmax)`.
 #[inline(always)]
 fn intersect(tri: &Triangle, o: Vec3A, d: Vec3A, tmin: f32, tmax: f32) -> Option<(f32, f32, f32)> {
     let e1 = tri.v1 - tri.v0;
@@ -71,29 +76,24 @@ fn intersect(tri: &Triangle, o: Vec3A, d: Vec3A, tmin: f32, tmax: f32) -> Option
     (t > tmin && t < tmax).then_some((t, b1, b2))
 }
 
-impl Accel {
-    /// Builds the BVH over `tris` (the thread count is that of the current rayon pool).
-    /// Returns the structure and the permutation `order[new] = old`.
+/// A bottom-level BVH and its triangles in BVH order.
+pub struct Blas {
+    bvh: Option<CwBvh>,
+    tris: Vec<Triangle>,
+}
+
+impl Blas {
+    /// Builds the BVH over `tris` (in the current rayon pool). Returns it and the
+    /// permutation `order[new] = old`.
     pub fn build(tris: Vec<[Vec3A; 3]>) -> (Self, Vec<u32>) {
-        let start = Instant::now();
         let tris: Vec<Triangle> = tris.into_iter().map(|[v0, v1, v2]| Triangle { v0, v1, v2 }).collect();
         if tris.is_empty() {
-            let stats = AccelStats { build_time: start.elapsed(), ..Default::default() };
-            return (Self { bvh: None, tris, stats }, Vec::new());
+            return (Self { bvh: None, tris }, Vec::new());
         }
         let bvh = build_cwbvh_from_tris(&tris, BvhBuildParams::medium_build(), &mut Duration::default());
         let order = bvh.primitive_indices.clone();
-        let sorted: Vec<Triangle> = order.iter().map(|&i| tris[i as usize]).collect();
-        let memory_bytes = bvh.nodes.len() * std::mem::size_of_val(&bvh.nodes[0])
-            + bvh.primitive_indices.len() * 4
-            + sorted.len() * std::mem::size_of::<Triangle>();
-        let stats = AccelStats { build_time: start.elapsed(), nodes: bvh.nodes.len(), memory_bytes };
-        (Self { bvh: Some(bvh), tris: sorted, stats }, order)
-    }
-
-    /// Build statistics.
-    pub fn stats(&self) -> AccelStats {
-        self.stats
+        let sorted = order.iter().map(|&i| tris[i as usize]).collect();
+        (Self { bvh: Some(bvh), tris: sorted }, order)
     }
 
     /// Number of triangles.
@@ -101,44 +101,216 @@ impl Accel {
         self.tris.len()
     }
 
-    /// True when there are no triangles.
+    /// True when it holds no triangle.
     pub fn is_empty(&self) -> bool {
         self.tris.is_empty()
     }
 
-    /// Vertices of triangle `tri` (BVH order).
+    /// Vertices of triangle `tri` (BVH order), in this BLAS's space.
     #[inline]
     pub fn vertices(&self, tri: u32) -> [Vec3A; 3] {
         let t = &self.tris[tri as usize];
         [t.v0, t.v1, t.v2]
     }
 
-    /// Closest intersection with `t ∈ (0, t_max)`.
+    fn nodes(&self) -> usize {
+        self.bvh.as_ref().map_or(0, |b| b.nodes.len())
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.bvh
+            .as_ref()
+            .map_or(0, |b| b.nodes.len() * std::mem::size_of_val(&b.nodes[0]) + b.primitive_indices.len() * 4)
+            + self.tris.len() * std::mem::size_of::<Triangle>()
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.bvh.as_ref().map_or(Aabb::empty(), |b| b.total_aabb)
+    }
+
     #[inline]
-    pub fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<RawHit> {
+    fn closest(&self, ray: obvhs::ray::Ray, accept: &impl Fn(u32, f32, f32) -> bool) -> Option<(u32, f32, f32, f32)> {
         let bvh = self.bvh.as_ref()?;
-        let oray = obvhs::ray::Ray::new(ray.origin, ray.dir, 0.0, t_max);
         let mut rh = RayHit::none();
         let mut bary = (0.0f32, 0.0f32);
-        let hit = bvh.ray_traverse(oray, &mut rh, |r, slot| {
+        let hit = bvh.ray_traverse(ray, &mut rh, |r, slot| {
             match intersect(&self.tris[slot], r.origin, r.direction, 0.0, r.tmax) {
-                Some((t, b1, b2)) => {
+                Some((t, b1, b2)) if accept(slot as u32, b1, b2) => {
                     bary = (b1, b2);
+                    t
+                }
+                _ => f32::INFINITY,
+            }
+        });
+        hit.then_some((rh.primitive_id, rh.t, bary.0, bary.1))
+    }
+
+    #[inline]
+    fn any(&self, ray: obvhs::ray::Ray, accept: &impl Fn(u32, f32, f32) -> bool) -> bool {
+        let Some(bvh) = self.bvh.as_ref() else { return false };
+        !bvh.ray_traverse_miss(ray, |r, slot| match intersect(&self.tris[slot], r.origin, r.direction, 0.0, r.tmax) {
+            Some((t, b1, b2)) if accept(slot as u32, b1, b2) => t,
+            _ => f32::INFINITY,
+        })
+    }
+}
+
+/// A placement of a BLAS in the world.
+#[derive(Clone, Copy, Debug)]
+pub struct Instance {
+    /// The BLAS.
+    pub blas: u32,
+    /// Object → world.
+    pub to_world: Mat4,
+    /// World → object.
+    pub to_object: Mat4,
+    /// Transforms normals to world space (inverse transpose).
+    pub normal_matrix: Mat3,
+    /// The transform mirrors (negative determinant): the front face is the clockwise one.
+    pub mirrored: bool,
+    /// True for the identity placement of the flattened world-space BLAS.
+    pub identity: bool,
+    world_bounds: Aabb,
+}
+
+impl Boundable for Instance {
+    fn aabb(&self) -> Aabb {
+        self.world_bounds
+    }
+}
+
+/// Sizes and timings of the acceleration structures.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct AccelStats {
+    /// Wall time of all builds.
+    pub build_time: Duration,
+    /// BVH nodes, all levels.
+    pub nodes: usize,
+    /// Bytes of nodes, triangles and index tables.
+    pub memory_bytes: usize,
+}
+
+/// All BLASes, their instances and (with more than one instance) the TLAS.
+pub struct Accel {
+    blases: Vec<Blas>,
+    instances: Vec<Instance>,
+    tlas: Option<CwBvh>,
+    stats: AccelStats,
+}
+
+impl Accel {
+    /// Places `blases` by `placements` (BLAS index, object-to-world; the identity
+    /// placement of a world-space BLAS is detected and kept transform-free) and builds the
+    /// TLAS when needed. `build_time` is what the BLAS builds took.
+    pub fn new(blases: Vec<Blas>, placements: &[(u32, Mat4)], build_time: Duration) -> Self {
+        let start = Instant::now();
+        let instances: Vec<Instance> = placements
+            .iter()
+            .filter(|(b, _)| !blases[*b as usize].is_empty())
+            .map(|&(blas, m)| {
+                let b = blases[blas as usize].bounds();
+                let mut world_bounds = Aabb::empty();
+                for k in 0..8 {
+                    let c = Vec3A::new(
+                        if k & 1 == 0 { b.min.x } else { b.max.x },
+                        if k & 2 == 0 { b.min.y } else { b.max.y },
+                        if k & 4 == 0 { b.min.z } else { b.max.z },
+                    );
+                    world_bounds.extend(m.transform_point3a(c));
+                }
+                let linear = Mat3::from_mat4(m);
+                Instance {
+                    blas,
+                    to_world: m,
+                    to_object: m.inverse(),
+                    normal_matrix: linear.inverse().transpose(),
+                    mirrored: linear.determinant() < 0.0,
+                    identity: m == Mat4::IDENTITY,
+                    world_bounds,
+                }
+            })
+            .collect();
+        let tlas = (instances.len() > 1)
+            .then(|| build_cwbvh(&instances, BvhBuildParams::medium_build(), &mut Duration::default()));
+        // Direct layout, as for triangles: the TLAS slot is the instance index.
+        let instances = match &tlas {
+            Some(t) => t.primitive_indices.iter().map(|&i| instances[i as usize]).collect(),
+            None => instances,
+        };
+        let nodes = blases.iter().map(Blas::nodes).sum::<usize>() + tlas.as_ref().map_or(0, |t| t.nodes.len());
+        let memory_bytes = blases.iter().map(Blas::memory_bytes).sum::<usize>()
+            + instances.len() * std::mem::size_of::<Instance>()
+            + tlas.as_ref().map_or(0, |t| t.nodes.len() * std::mem::size_of_val(&t.nodes[0]));
+        let stats = AccelStats { build_time: build_time + start.elapsed(), nodes, memory_bytes };
+        Self { blases, instances, tlas, stats }
+    }
+
+    /// Build statistics.
+    pub fn stats(&self) -> AccelStats {
+        self.stats
+    }
+
+    /// The instances.
+    pub fn instances(&self) -> &[Instance] {
+        &self.instances
+    }
+
+    /// The BLASes.
+    pub fn blases(&self) -> &[Blas] {
+        &self.blases
+    }
+
+    #[inline]
+    fn local_ray(inst: &Instance, ray: &Ray, t_max: f32) -> obvhs::ray::Ray {
+        if inst.identity {
+            obvhs_ray(ray.origin, ray.dir, t_max)
+        } else {
+            obvhs_ray(inst.to_object.transform_point3a(ray.origin), inst.to_object.transform_vector3a(ray.dir), t_max)
+        }
+    }
+
+    /// Closest intersection with `t ∈ (0, t_max)` that `accept(blas, tri, b1, b2)` keeps
+    /// (alpha cut-outs return false and the ray passes through).
+    #[inline]
+    pub fn closest_hit(&self, ray: &Ray, t_max: f32, accept: impl Fn(u32, u32, f32, f32) -> bool) -> Option<RawHit> {
+        let Some(tlas) = &self.tlas else {
+            let inst = self.instances.first()?;
+            let acc = |tri, b1, b2| accept(inst.blas, tri, b1, b2);
+            let (tri, t, b1, b2) = self.blases[inst.blas as usize].closest(Self::local_ray(inst, ray, t_max), &acc)?;
+            return Some(RawHit { instance: 0, tri, t, b1, b2 });
+        };
+        let mut best: Option<RawHit> = None;
+        let mut rh = RayHit::none();
+        tlas.ray_traverse(obvhs_ray(ray.origin, ray.dir, t_max), &mut rh, |r, slot| {
+            let inst = &self.instances[slot];
+            let acc = |tri, b1, b2| accept(inst.blas, tri, b1, b2);
+            match self.blases[inst.blas as usize].closest(Self::local_ray(inst, ray, r.tmax), &acc) {
+                Some((tri, t, b1, b2)) => {
+                    best = Some(RawHit { instance: slot as u32, tri, t, b1, b2 });
                     t
                 }
                 None => f32::INFINITY,
             }
         });
-        hit.then_some(RawHit { tri: rh.primitive_id, t: rh.t, b1: bary.0, b2: bary.1 })
+        best
     }
 
-    /// True when something lies on the segment `origin + t·dir`, `t ∈ (0, t_max)`.
+    /// True when something `accept` keeps lies on `origin + t·dir`, `t ∈ (0, t_max)`.
     #[inline]
-    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        let Some(bvh) = self.bvh.as_ref() else { return false };
-        let oray = obvhs::ray::Ray::new(ray.origin, ray.dir, 0.0, t_max);
-        !bvh.ray_traverse_miss(oray, |r, slot| {
-            intersect(&self.tris[slot], r.origin, r.direction, 0.0, r.tmax).map_or(f32::INFINITY, |h| h.0)
+    pub fn occluded(&self, ray: &Ray, t_max: f32, accept: impl Fn(u32, u32, f32, f32) -> bool) -> bool {
+        let Some(tlas) = &self.tlas else {
+            let Some(inst) = self.instances.first() else { return false };
+            let acc = |tri, b1, b2| accept(inst.blas, tri, b1, b2);
+            return self.blases[inst.blas as usize].any(Self::local_ray(inst, ray, t_max), &acc);
+        };
+        !tlas.ray_traverse_miss(obvhs_ray(ray.origin, ray.dir, t_max), |r, slot| {
+            let inst = &self.instances[slot];
+            let acc = |tri, b1, b2| accept(inst.blas, tri, b1, b2);
+            if self.blases[inst.blas as usize].any(Self::local_ray(inst, ray, r.tmax), &acc) {
+                0.5 * r.tmax
+            } else {
+                f32::INFINITY
+            }
         })
     }
 }
@@ -155,31 +327,77 @@ mod tests {
         vec![[a, b, c], [a, c, d]]
     }
 
+    const ALL: fn(u32, u32, f32, f32) -> bool = |_, _, _, _| true;
+
     #[test]
     fn closest_hit_and_occlusion() {
         let mut tris = quad(-1.0);
         tris.extend(quad(-3.0));
-        let (accel, order) = Accel::build(tris.clone());
+        let (blas, order) = Blas::build(tris.clone());
         assert_eq!(order.len(), 4);
+        let accel = Accel::new(vec![blas], &[(0, Mat4::IDENTITY)], Duration::ZERO);
         let ray = Ray::new(Vec3A::new(0.2, 0.3, 0.0), Vec3A::new(0.0, 0.0, -1.0));
-        let h = accel.closest_hit(&ray, f32::INFINITY).unwrap();
+        let h = accel.closest_hit(&ray, f32::INFINITY, ALL).unwrap();
         assert!((h.t - 1.0).abs() < 1e-6);
-        let [v0, v1, v2] = accel.vertices(h.tri);
+        let [v0, v1, v2] = accel.blases()[0].vertices(h.tri);
         let p = v0 * (1.0 - h.b1 - h.b2) + v1 * h.b1 + v2 * h.b2;
         assert!((p - Vec3A::new(0.2, 0.3, -1.0)).length() < 1e-5);
         assert!(tris[order[h.tri as usize] as usize][0].z == -1.0);
-        assert!(accel.occluded(&ray, 2.0));
-        assert!(!accel.occluded(&ray, 0.5));
-        assert!(accel.closest_hit(&Ray::new(Vec3A::ZERO, Vec3A::Z), f32::INFINITY).is_none());
-        // Closest hit honours t_max.
-        assert!(accel.closest_hit(&ray, 0.9).is_none());
+        assert!(accel.occluded(&ray, 2.0, ALL));
+        assert!(!accel.occluded(&ray, 0.5, ALL));
+        assert!(accel.closest_hit(&Ray::new(Vec3A::ZERO, Vec3A::Z), f32::INFINITY, ALL).is_none());
+        assert!(accel.closest_hit(&ray, 0.9, ALL).is_none());
+        // A rejected triangle lets the ray through to the next.
+        let h2 = accel
+            .closest_hit(&ray, f32::INFINITY, |_, tri, _, _| tris[order[tri as usize] as usize][0].z != -1.0)
+            .unwrap();
+        assert!((h2.t - 3.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn instances_place_one_blas_many_times() {
+        let (blas, _) = Blas::build(quad(0.0));
+        let place = |z: f32, s: f32| {
+            Mat4::from_translation(glam::Vec3::new(0.0, 0.0, z)) * Mat4::from_scale(glam::Vec3::splat(s))
+        };
+        let accel = Accel::new(
+            vec![blas],
+            &[(0, place(-2.0, 1.0)), (0, place(-5.0, 3.0)), (0, place(-9.0, 0.1))],
+            Duration::ZERO,
+        );
+        assert_eq!(accel.instances().len(), 3);
+        let ray = Ray::new(Vec3A::new(2.0, 0.0, 0.0), -Vec3A::Z);
+        // x = 2 misses the first (unit) quad and hits the scaled one at z = -5.
+        let h = accel.closest_hit(&ray, f32::INFINITY, ALL).unwrap();
+        assert_eq!(accel.instances()[h.instance as usize].to_world.w_axis.z, -5.0);
+        assert!((h.t - 5.0).abs() < 1e-5, "{}", h.t);
+        let centre = Ray::new(Vec3A::ZERO, -Vec3A::Z);
+        assert!((accel.closest_hit(&centre, f32::INFINITY, ALL).unwrap().t - 2.0).abs() < 1e-5);
+        assert!(accel.occluded(&centre, 2.5, ALL) && !accel.occluded(&centre, 1.5, ALL));
     }
 
     #[test]
     fn empty_scene_never_hits() {
-        let (accel, _) = Accel::build(Vec::new());
+        let (blas, _) = Blas::build(Vec::new());
+        let accel = Accel::new(vec![blas], &[(0, Mat4::IDENTITY)], Duration::ZERO);
         let ray = Ray::new(Vec3A::ZERO, Vec3A::X);
-        assert!(accel.closest_hit(&ray, f32::INFINITY).is_none());
-        assert!(!accel.occluded(&ray, f32::INFINITY));
+        assert!(accel.closest_hit(&ray, f32::INFINITY, ALL).is_none());
+        assert!(!accel.occluded(&ray, f32::INFINITY, ALL));
+    }
+}
+
+#[cfg(test)]
+mod regression {
+    use super::*;
+
+    #[test]
+    fn negative_zero_directions_still_hit() {
+        let (blas, _) =
+            Blas::build(vec![[Vec3A::new(-1.0, -1.0, -1.0), Vec3A::new(1.0, -1.0, -1.0), Vec3A::new(1.0, 1.0, -1.0)]]);
+        let accel = Accel::new(vec![blas], &[(0, Mat4::IDENTITY)], Duration::ZERO);
+        // -Vec3A::Z is (-0, -0, -1).
+        let ray = Ray::new(Vec3A::new(0.5, -0.4, 0.0), -Vec3A::Z);
+        assert!(accel.closest_hit(&ray, f32::INFINITY, |_, _, _, _| true).is_some());
+        assert!(accel.occluded(&ray, 2.0, |_, _, _, _| true));
     }
 }

@@ -14,10 +14,12 @@ pub struct SurfaceHit {
     pub n_shading: Vec3A,
     /// Texture coordinates (zero when the mesh has none).
     pub uv: Vec2,
+    /// ∂p/∂u of the triangle (zero without UVs): the tangent normal maps use.
+    pub dpdu: Vec3A,
+    /// ∂p/∂v of the triangle (zero without UVs).
+    pub dpdv: Vec3A,
     /// Ray parameter of the hit.
     pub t: f32,
-    /// Triangle index (BVH order).
-    pub tri: u32,
     /// Material index.
     pub material: u32,
     /// Light index when the triangle emits.

@@ -1,12 +1,16 @@
-//! The scene's triangles in world space, with the shading attributes a hit needs.
+//! The scene's triangles with the shading attributes a hit needs.
 //!
-//! Owns: [`GeometryBuilder`] (collects triangles from every shape and mesh), [`Geometry`]
-//! (the built, immutable form: [`Accel`] plus per-triangle [`TriangleInfo`] in BVH order, and
-//! indexed vertex normals and UVs) and the closest-hit query that turns a raw hit into a
-//! [`SurfaceHit`].
+//! Owns: [`GeometryBuilder`] (collects world-space triangles into one flattened block, and
+//! shared meshes once each with their instances), [`Geometry`] (the built form: [`Accel`]
+//! plus per-triangle [`TriangleInfo`] in BVH order per block, and indexed vertex normals and
+//! UVs) and the closest-hit query that turns a raw hit into a [`SurfaceHit`] in world space.
+//! Block 0 is always the flattened world-space one.
 
-use super::{Accel, Ray, SurfaceHit};
-use crate::math::{Vec2, Vec3A};
+use std::time::Instant;
+
+use super::accel::{Accel, Blas, Instance};
+use super::{Ray, SurfaceHit};
+use crate::math::{Mat4, Vec2, Vec3A};
 
 /// `TriangleInfo::light` of a triangle that does not emit.
 pub const NO_LIGHT: u32 = u32::MAX;
@@ -24,30 +28,50 @@ pub struct TriangleInfo {
     pub smooth: bool,
     /// Whether `attr` holds UVs.
     pub has_uv: bool,
+    /// Whether the material cuts out by alpha: hits must be tested.
+    pub masked: bool,
 }
 
-/// Collects triangles before the BVH is built.
+/// Shading attributes of triangles about to be added.
+#[derive(Clone, Copy, Debug)]
+pub struct Attributes {
+    /// Index of the first vertex's normal/UV, from [`GeometryBuilder::push_vertices`].
+    pub base: u32,
+    /// Normals are present.
+    pub smooth: bool,
+    /// UVs are present.
+    pub has_uv: bool,
+}
+
 #[derive(Default)]
-pub struct GeometryBuilder {
+struct Block {
     tris: Vec<[Vec3A; 3]>,
     info: Vec<TriangleInfo>,
+}
+
+/// Collects triangles before the BVHs are built.
+#[derive(Default)]
+pub struct GeometryBuilder {
+    /// Block 0 (flattened, world space) then one per shared mesh (object space).
+    blocks: Vec<Block>,
+    placements: Vec<(u32, Mat4)>,
     normals: Vec<Vec3A>,
     uvs: Vec<Vec2>,
 }
 
 impl GeometryBuilder {
-    /// Number of triangles so far; the index the next triangle will get before reordering.
-    pub fn len(&self) -> usize {
-        self.tris.len()
+    /// An empty builder with its world-space block.
+    pub fn new() -> Self {
+        Self { blocks: vec![Block::default()], placements: vec![(0, Mat4::IDENTITY)], ..Default::default() }
     }
 
-    /// True when no triangle was added.
-    pub fn is_empty(&self) -> bool {
-        self.tris.is_empty()
+    /// Triangles in the flattened block so far: the index the next one gets before reordering.
+    pub fn flat_len(&self) -> usize {
+        self.blocks[0].tris.len()
     }
 
-    /// Appends per-vertex normals and UVs (either may be absent; absent UVs read as zero)
-    /// and returns the index of the first one, for [`GeometryBuilder::push_triangle`].
+    /// Appends per-vertex normals and UVs (either may be absent; absent UVs read as zero) and
+    /// returns the index of the first, for [`Attributes::base`].
     pub fn push_vertices(&mut self, normals: Option<&[Vec3A]>, uvs: Option<&[Vec2]>, count: usize) -> u32 {
         let base = self.normals.len() as u32;
         match normals {
@@ -61,67 +85,117 @@ impl GeometryBuilder {
         base
     }
 
-    /// Appends one triangle and returns its (pre-BVH) index. `attr`: vertex indices returned
-    /// by [`GeometryBuilder::push_vertices`], with whether normals and UVs are meaningful.
+    fn push(
+        block: &mut Block,
+        positions: [Vec3A; 3],
+        corners: [u32; 3],
+        attr: Option<Attributes>,
+        material: u32,
+        light: u32,
+        masked: bool,
+    ) {
+        let (attr, smooth, has_uv) =
+            attr.map_or(([0; 3], false, false), |a| (corners.map(|c| a.base + c), a.smooth, a.has_uv));
+        block.tris.push(positions);
+        block.info.push(TriangleInfo { attr, material, light, smooth, has_uv, masked });
+    }
+
+    /// Appends one world-space triangle to the flattened block. `corners` index the vertex
+    /// attributes relative to `attr.base`.
     pub fn push_triangle(
         &mut self,
         positions: [Vec3A; 3],
-        attr: Option<([u32; 3], bool, bool)>,
+        corners: [u32; 3],
+        attr: Option<Attributes>,
         material: u32,
         light: u32,
+        masked: bool,
+    ) {
+        Self::push(&mut self.blocks[0], positions, corners, attr, material, light, masked);
+    }
+
+    /// Adds a mesh that several instances share, in object space; returns its block.
+    pub fn add_shared_mesh(
+        &mut self,
+        positions: &[Vec3A],
+        triangles: &[[u32; 3]],
+        attr: Option<Attributes>,
+        material: u32,
+        masked: bool,
     ) -> u32 {
-        let (attr, smooth, has_uv) = attr.unwrap_or(([0; 3], false, false));
-        self.tris.push(positions);
-        self.info.push(TriangleInfo { attr, material, light, smooth, has_uv });
-        (self.tris.len() - 1) as u32
-    }
-
-    /// Sets the light of a triangle added earlier.
-    pub fn set_light(&mut self, tri: u32, light: u32) {
-        self.info[tri as usize].light = light;
-    }
-
-    /// Builds the BVH and reorders the triangles. Returns the geometry and `new_index[old]`.
-    pub fn build(self) -> (Geometry, Vec<u32>) {
-        let (accel, order) = Accel::build(self.tris);
-        let mut new_index = vec![0u32; order.len()];
-        for (new, &old) in order.iter().enumerate() {
-            new_index[old as usize] = new as u32;
+        let mut block = Block::default();
+        for &t in triangles {
+            Self::push(&mut block, t.map(|i| positions[i as usize]), t, attr, material, NO_LIGHT, masked);
         }
-        let info = order.iter().map(|&old| self.info[old as usize]).collect();
-        let geometry = Geometry { accel, info, normals: self.normals, uvs: self.uvs };
-        (geometry, new_index)
+        self.blocks.push(block);
+        (self.blocks.len() - 1) as u32
+    }
+
+    /// Places shared block `block` in the world.
+    pub fn add_instance(&mut self, block: u32, transform: Mat4) {
+        self.placements.push((block, transform));
+    }
+
+    /// Builds every BVH. Returns the geometry and, for the flattened block, `new_index[old]`.
+    pub fn build(self) -> (Geometry, Vec<u32>) {
+        let start = Instant::now();
+        let mut blases = Vec::with_capacity(self.blocks.len());
+        let mut infos = Vec::with_capacity(self.blocks.len());
+        let mut flat_index = Vec::new();
+        for (k, block) in self.blocks.into_iter().enumerate() {
+            let (blas, order) = Blas::build(block.tris);
+            infos.push(order.iter().map(|&old| block.info[old as usize]).collect::<Vec<_>>());
+            if k == 0 {
+                flat_index = vec![0u32; order.len()];
+                for (new, &old) in order.iter().enumerate() {
+                    flat_index[old as usize] = new as u32;
+                }
+            }
+            blases.push(blas);
+        }
+        let accel = Accel::new(blases, &self.placements, start.elapsed());
+        (Geometry { accel, info: infos, normals: self.normals, uvs: self.uvs }, flat_index)
     }
 }
 
 /// All triangles of a scene, ready for ray queries.
 pub struct Geometry {
-    /// The BVH and the triangles' positions.
+    /// The BVHs and the triangles' positions.
     pub accel: Accel,
-    /// Shading record per triangle, in BVH order.
-    pub info: Vec<TriangleInfo>,
+    /// Shading record per triangle, per block, in BVH order.
+    info: Vec<Vec<TriangleInfo>>,
     normals: Vec<Vec3A>,
     uvs: Vec<Vec2>,
 }
 
 impl Geometry {
-    /// Number of triangles.
+    /// Triangles as rendered (every instance counted).
     pub fn triangle_count(&self) -> usize {
-        self.info.len()
+        self.accel.instances().iter().map(|i| self.info[i.blas as usize].len()).sum()
     }
 
-    /// Bytes held by the triangles, their attributes and the BVH.
+    /// Triangles stored (shared meshes counted once).
+    pub fn stored_triangle_count(&self) -> usize {
+        self.info.iter().map(Vec::len).sum()
+    }
+
+    /// Bytes held by the triangles, their attributes and the BVHs.
     pub fn memory_bytes(&self) -> usize {
         self.accel.stats().memory_bytes
-            + self.info.capacity() * std::mem::size_of::<TriangleInfo>()
+            + self.info.iter().map(|i| i.capacity() * std::mem::size_of::<TriangleInfo>()).sum::<usize>()
             + self.normals.capacity() * std::mem::size_of::<Vec3A>()
             + self.uvs.capacity() * std::mem::size_of::<Vec2>()
     }
 
-    /// Texture coordinates at barycentrics (b1, b2) of triangle `tri`.
+    /// The shading record of triangle `tri` of block `blas`.
     #[inline]
-    pub fn uv_at(&self, tri: u32, b1: f32, b2: f32) -> Vec2 {
-        let info = &self.info[tri as usize];
+    pub fn info(&self, blas: u32, tri: u32) -> &TriangleInfo {
+        &self.info[blas as usize][tri as usize]
+    }
+
+    /// Texture coordinates at barycentrics (b1, b2) of a triangle.
+    #[inline]
+    pub fn uv_at(&self, info: &TriangleInfo, b1: f32, b2: f32) -> Vec2 {
         if !info.has_uv {
             return Vec2::ZERO;
         }
@@ -129,38 +203,124 @@ impl Geometry {
         a * (1.0 - b1 - b2) + b * b1 + c * b2
     }
 
-    /// Closest surface along `ray` with `t ∈ (0, t_max)`.
+    /// Every triangle in world space (vertices counter-clockwise from the front), with its
+    /// record: for bounds and tests.
+    pub fn world_triangles(&self) -> impl Iterator<Item = ([Vec3A; 3], &TriangleInfo)> + '_ {
+        self.accel.instances().iter().flat_map(move |inst| {
+            let blas = &self.accel.blases()[inst.blas as usize];
+            (0..blas.len() as u32).map(move |t| (world_vertices(inst, blas.vertices(t)), self.info(inst.blas, t)))
+        })
+    }
+
+    /// Closest surface along `ray` with `t ∈ (0, t_max)`. `cut_out(material, uv)` is asked
+    /// about hits on alpha-masked triangles; true lets the ray pass.
     #[inline]
-    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
-        let raw = self.accel.closest_hit(ray, t_max)?;
-        let [v0, v1, v2] = self.accel.vertices(raw.tri);
+    pub fn intersect(&self, ray: &Ray, t_max: f32, cut_out: impl Fn(u32, Vec2) -> bool) -> Option<SurfaceHit> {
+        let raw = self.accel.closest_hit(ray, t_max, |blas, tri, b1, b2| {
+            let info = self.info(blas, tri);
+            !info.masked || !cut_out(info.material, self.uv_at(info, b1, b2))
+        })?;
+        let inst = &self.accel.instances()[raw.instance as usize];
+        let [v0, v1, v2] = world_vertices(inst, self.accel.blases()[inst.blas as usize].vertices(raw.tri));
         let (b1, b2) = (raw.b1, raw.b2);
         let b0 = 1.0 - b1 - b2;
         let p = v0 * b0 + v1 * b1 + v2 * b2;
         let n_geom = (v1 - v0).cross(v2 - v0).normalize_or_zero();
-        let info = &self.info[raw.tri as usize];
+        let info = self.info(inst.blas, raw.tri);
         let n_shading = if info.smooth {
             let [a, b, c] = info.attr.map(|i| self.normals[i as usize]);
-            let n = (a * b0 + b * b1 + c * b2).normalize_or_zero();
-            if n == Vec3A::ZERO { n_geom } else { n }
+            let n = a * b0 + b * b1 + c * b2;
+            let n = if inst.identity { n } else { inst.normal_matrix * n };
+            n.try_normalize().unwrap_or(n_geom)
         } else {
             n_geom
         };
+        let uv = self.uv_at(info, b1, b2);
+        let (dpdu, dpdv) = if info.has_uv {
+            let [t0, t1, t2] = info.attr.map(|i| self.uvs[i as usize]);
+            position_derivatives([v0, v1, v2], [t0, t1, t2])
+        } else {
+            (Vec3A::ZERO, Vec3A::ZERO)
+        };
         Some(SurfaceHit {
             p,
-            n_geom,
+            // World vertices of a mirrored instance wind the other way: flip back to its front.
+            n_geom: if inst.mirrored { -n_geom } else { n_geom },
             n_shading,
-            uv: self.uv_at(raw.tri, b1, b2),
+            uv,
+            dpdu,
+            dpdv,
             t: raw.t,
-            tri: raw.tri,
             material: info.material,
             light: (info.light != NO_LIGHT).then_some(info.light),
         })
     }
 
-    /// True when something blocks the segment from `origin` to `origin + dir·t_max`.
+    /// True when something not cut out blocks the segment from `origin` to
+    /// `origin + dir·t_max`.
     #[inline]
-    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        self.accel.occluded(ray, t_max)
+    pub fn occluded(&self, ray: &Ray, t_max: f32, cut_out: impl Fn(u32, Vec2) -> bool) -> bool {
+        self.accel.occluded(ray, t_max, |blas, tri, b1, b2| {
+            let info = self.info(blas, tri);
+            !info.masked || !cut_out(info.material, self.uv_at(info, b1, b2))
+        })
+    }
+}
+
+#[inline]
+fn world_vertices(inst: &Instance, v: [Vec3A; 3]) -> [Vec3A; 3] {
+    if inst.identity { v } else { v.map(|p| inst.to_world.transform_point3a(p)) }
+}
+
+/// dp/du and dp/dv of a triangle from its positions and texture coordinates (zero when the
+/// UV mapping is degenerate).
+fn position_derivatives(p: [Vec3A; 3], uv: [Vec2; 3]) -> (Vec3A, Vec3A) {
+    let (d1, d2) = (uv[1] - uv[0], uv[2] - uv[0]);
+    let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
+    let det = d1.x * d2.y - d1.y * d2.x;
+    if det.abs() < 1e-12 {
+        return (Vec3A::ZERO, Vec3A::ZERO);
+    }
+    let inv = 1.0 / det;
+    ((e1 * d2.y - e2 * d1.y) * inv, (e2 * d1.x - e1 * d2.x) * inv)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn derivatives_of_an_axis_aligned_mapping() {
+        let p = [Vec3A::ZERO, Vec3A::new(2.0, 0.0, 0.0), Vec3A::new(0.0, 3.0, 0.0)];
+        let uv = [Vec2::ZERO, Vec2::X, Vec2::Y];
+        let (du, dv) = position_derivatives(p, uv);
+        assert!((du - Vec3A::new(2.0, 0.0, 0.0)).length() < 1e-6 && (dv - Vec3A::new(0.0, 3.0, 0.0)).length() < 1e-6);
+    }
+
+    #[test]
+    fn shared_meshes_are_stored_once_and_hit_in_world_space() {
+        let mut g = GeometryBuilder::new();
+        let quad = [
+            Vec3A::new(-1.0, -1.0, 0.0),
+            Vec3A::new(1.0, -1.0, 0.0),
+            Vec3A::new(1.0, 1.0, 0.0),
+            Vec3A::new(-1.0, 1.0, 0.0),
+        ];
+        let normals = [Vec3A::Z; 4];
+        let base = g.push_vertices(Some(&normals), None, 4);
+        let attr = Attributes { base, smooth: true, has_uv: false };
+        let block = g.add_shared_mesh(&quad, &[[0, 1, 2], [0, 2, 3]], Some(attr), 7, false);
+        for k in 0..100 {
+            let m = Mat4::from_translation(glam::Vec3::new(0.0, 0.0, -(k as f32) - 1.0)) * Mat4::from_rotation_y(0.3);
+            g.add_instance(block, m);
+        }
+        let (geo, _) = g.build();
+        assert_eq!(geo.stored_triangle_count(), 2);
+        assert_eq!(geo.triangle_count(), 200);
+        let hit = geo.intersect(&Ray::new(Vec3A::new(0.1, 0.2, 0.0), -Vec3A::Z), f32::INFINITY, |_, _| false).unwrap();
+        assert!((hit.p.z + 1.0).abs() < 0.1, "{}", hit.p);
+        assert_eq!(hit.material, 7);
+        // The shading normal is rotated with the instance.
+        assert!((hit.n_shading - Vec3A::new(0.3f32.sin(), 0.0, 0.3f32.cos())).length() < 1e-4, "{}", hit.n_shading);
     }
 }

@@ -10,9 +10,9 @@ mod hit;
 mod mesh;
 mod offset;
 
-pub use accel::{Accel, AccelStats};
+pub use accel::{Accel, AccelStats, Blas, Instance, RawHit};
 pub use hit::SurfaceHit;
-pub use mesh::{Geometry, GeometryBuilder, NO_LIGHT, TriangleInfo};
+pub use mesh::{Attributes, Geometry, GeometryBuilder, NO_LIGHT, TriangleInfo};
 pub use offset::offset_ray_origin;
 
 use crate::math::Vec3A;

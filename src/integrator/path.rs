@@ -51,13 +51,13 @@ pub fn radiance(
         let wo = -ray.dir.normalize();
         if depth == 0 {
             let n = if hit.n_shading.dot(wo) < 0.0 { -hit.n_shading } else { hit.n_shading };
-            first_hit =
-                Some(FirstHit { albedo: scene.materials[hit.material as usize].base_color, normal: n, depth: hit.t });
+            let albedo = scene.materials[hit.material as usize].base_color_at(hit.uv, &scene.images);
+            first_hit = Some(FirstHit { albedo, normal: n, depth: hit.t });
         }
 
         if let Some(id) = hit.light {
             let light = &scene.lights[id as usize];
-            let le = light.emitted(hit.n_geom, ray.dir);
+            let le = light.emitted(hit.n_geom, ray.dir, hit.uv);
             if le != Rgb::ZERO {
                 let weight = match prev {
                     None => 1.0,
@@ -72,8 +72,10 @@ pub fn radiance(
         if depth == max_depth {
             break;
         }
-        let Some(bsdf) = scene.materials[hit.material as usize].bsdf() else { break };
-        let sp = ShadingPoint::new(bsdf, hit.n_geom, hit.n_shading, wo);
+        let material = &scene.materials[hit.material as usize];
+        let Some(bsdf) = material.bsdf(hit.uv, &scene.images) else { break };
+        let n_shading = material.mapped_normal(hit.n_shading, hit.dpdu, hit.dpdv, hit.uv, &scene.images);
+        let sp = ShadingPoint::new(bsdf, hit.n_geom, n_shading, wo);
 
         if !scene.lights.is_empty() {
             l += beta * estimate_direct(scene, strategy, &sp, hit.p, wo, stream, depth, counters);

@@ -6,6 +6,8 @@
 //! target, then rename it over).
 
 pub mod exr;
+pub mod gltf;
+pub mod image_file;
 pub mod obj;
 pub mod png;
 pub mod ron;
@@ -15,16 +17,34 @@ use std::path::{Path, PathBuf};
 use crate::error::{Error, Result};
 use crate::scene::SceneDescription;
 
-/// Loads a scene file, choosing the loader by extension (`.ron`, `.obj`).
-pub fn load_scene(path: &Path) -> Result<SceneDescription> {
+/// Choices made when reading scene files.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LoadOptions {
+    /// The glTF scene to load (default: the file's default scene, else its first).
+    pub gltf_scene: Option<usize>,
+    /// Factor from glTF punctual light units (cd, lux) to radiometric ones (W/sr, W/m²):
+    /// 1/683 for files written with 683 lm/W, as Blender's exporter does in its default
+    /// "Standard" lighting mode; 1 for files whose intensities are already radiometric.
+    pub punctual_scale: f32,
+}
+
+impl Default for LoadOptions {
+    fn default() -> Self {
+        Self { gltf_scene: None, punctual_scale: 1.0 / 683.0 }
+    }
+}
+
+/// Loads a scene file, choosing the loader by extension (`.ron`, `.obj`, `.gltf`, `.glb`).
+pub fn load_scene(path: &Path, options: &LoadOptions) -> Result<SceneDescription> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
     match ext.as_str() {
-        "ron" => ron::load(path),
+        "ron" => ron::load(path, options),
         "obj" => obj::load_scene(path),
+        "gltf" | "glb" => gltf::load(path, options),
         _ => Err(Error::scene(
             path.display().to_string(),
             "file name",
-            format!("unknown scene format '.{ext}'; myriad reads .ron and .obj scenes"),
+            format!("unknown scene format '.{ext}'; myriad reads .ron, .obj, .gltf and .glb scenes"),
         )),
     }
 }

@@ -3,7 +3,8 @@
 //! Parses the format of [`crate::scene::format`] (implicit `Some` on, unknown fields denied),
 //! reports syntax errors as `file: line:col: message` with the offending line and a caret, and
 //! compiles the file into the description: named materials to indices, shapes and light grids
-//! to meshes and lights, `.obj` meshes loaded relative to the scene file.
+//! to meshes and lights, `.obj`/`.gltf`/`.glb` files loaded relative to the scene file and
+//! included with their materials and lights.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -11,6 +12,7 @@ use std::sync::Arc;
 
 use ::ron::extensions::Extensions;
 
+use super::LoadOptions;
 use crate::error::{Error, Result};
 use crate::material::Material;
 use crate::math::{Mat4, Rgb, UVec2, Vec3A};
@@ -21,14 +23,14 @@ use crate::scene::format::{CameraSpec, LightSpec, MaterialSpec, ObjectSpec, Scen
 use crate::scene::shapes;
 
 /// Reads and compiles the scene file at `path`.
-pub fn load(path: &Path) -> Result<SceneDescription> {
+pub fn load(path: &Path, options: &LoadOptions) -> Result<SceneDescription> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     let base = path.parent().unwrap_or(Path::new("."));
-    parse(&text, &path.display().to_string(), base)
+    parse(&text, &path.display().to_string(), base, options)
 }
 
 /// Compiles scene text; `source` names it in messages, `base_dir` resolves relative paths.
-pub fn parse(text: &str, source: &str, base_dir: &Path) -> Result<SceneDescription> {
+pub fn parse(text: &str, source: &str, base_dir: &Path, options: &LoadOptions) -> Result<SceneDescription> {
     let file: SceneFile = ::ron::Options::default()
         .with_default_extension(Extensions::IMPLICIT_SOME | Extensions::UNWRAP_VARIANT_NEWTYPES)
         .from_str(text)
@@ -42,7 +44,7 @@ pub fn parse(text: &str, source: &str, base_dir: &Path) -> Result<SceneDescripti
                 format!("{}\n  {line:>4} | {snippet}\n       | {caret}^", e.code),
             )
         })?;
-    compile(file, source, base_dir)
+    compile(file, source, base_dir, options)
 }
 
 fn v3(a: [f32; 3]) -> Vec3A {
@@ -72,7 +74,7 @@ fn material(name: &str, spec: &MaterialSpec) -> Material {
     }
 }
 
-fn compile(file: SceneFile, source: &str, base_dir: &Path) -> Result<SceneDescription> {
+fn compile(file: SceneFile, source: &str, base_dir: &Path, options: &LoadOptions) -> Result<SceneDescription> {
     let mut desc = SceneDescription { source: source.to_string(), ..Default::default() };
     let CameraSpec::Perspective { eye, look_at, up, yfov_deg } = file.camera;
     desc.cameras.push(CameraDesc {
@@ -148,21 +150,21 @@ fn compile(file: SceneFile, source: &str, base_dir: &Path) -> Result<SceneDescri
                 let what = format!("objects[{i}] Mesh");
                 let override_material = material.as_deref().map(|m| lookup(&what, m)).transpose()?;
                 let full = base_dir.join(path);
-                let loaded = super::obj::load_meshes(&full).map_err(|e| match e {
+                let ext = full.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
+                if ext == "ron" {
+                    return Err(Error::scene(
+                        source,
+                        what,
+                        "can include .obj, .gltf and .glb files, not other .ron scenes",
+                    ));
+                }
+                let loaded = super::load_scene(&full, options).map_err(|e| match e {
                     Error::Io { source: io, .. } => {
                         Error::scene(source, &what, format!("cannot read '{}': {io}", full.display()))
                     }
                     other => other,
                 })?;
-                let first_material = desc.materials.len() as u32;
-                desc.materials.extend(loaded.materials);
-                desc.warnings.extend(loaded.warnings);
-                let m = transform(t);
-                for mut mesh in loaded.meshes {
-                    mesh.material = override_material.unwrap_or(first_material + mesh.material);
-                    let name = format!("{what} '{}'", mesh.name);
-                    place(&mut desc, mesh, m, name);
-                }
+                desc.include(loaded, transform(t), override_material);
             }
         }
     }

@@ -277,7 +277,7 @@ impl Light {
             Light::Triangle(l) => LightBounds {
                 min: l.v[0].min(l.v[1]).min(l.v[2]),
                 max: l.v[0].max(l.v[1]).max(l.v[2]),
-                phi: floor(l.emission.radiance.max_element() * l.area),
+                phi: floor(l.mean_radiance().max_element() * l.area),
                 w: l.n,
                 cos_theta_o: 1.0,
                 cos_theta_e: 0.0,

@@ -20,7 +20,7 @@ pub use distant::DistantLight;
 pub use point::PointLight;
 pub use quad::QuadLight;
 pub use spot::SpotLight;
-pub use triangle::TriangleLight;
+pub use triangle::{EmissionTexture, TriangleLight};
 
 use crate::math::{Rgb, Vec2, Vec3A};
 
@@ -86,12 +86,12 @@ impl Light {
     }
 
     /// Radiance leaving the surface at a ray hit, along `-dir` (`dir`: the ray's direction;
-    /// `n_geom`: the hit triangle's counter-clockwise normal).
+    /// `n_geom`: the hit triangle's front normal; `uv`: texture coordinates at the hit).
     #[inline]
-    pub fn emitted(&self, n_geom: Vec3A, dir: Vec3A) -> Rgb {
+    pub fn emitted(&self, n_geom: Vec3A, dir: Vec3A, uv: Vec2) -> Rgb {
         match self {
             Light::Point(_) | Light::Spot(_) | Light::Distant(_) => Rgb::ZERO,
-            Light::Triangle(l) => l.emission.radiance_towards(n_geom, -dir),
+            Light::Triangle(l) => l.emitted(uv, -dir),
             Light::Quad(l) => l.emission.radiance_towards(n_geom, -dir),
         }
     }
@@ -102,7 +102,7 @@ impl Light {
             Light::Point(l) => l.power(),
             Light::Spot(l) => l.power(),
             Light::Distant(l) => l.power(scene_radius),
-            Light::Triangle(l) => l.emission.power(l.area),
+            Light::Triangle(l) => AreaEmission { radiance: l.mean_radiance(), ..l.emission }.power(l.area),
             Light::Quad(l) => l.emission.power(l.area),
         }
     }

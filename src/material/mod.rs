@@ -11,10 +11,12 @@
 mod diffuse;
 mod metal_rough;
 mod microfacet;
+pub mod texture;
 
 pub use diffuse::Diffuse;
 pub use metal_rough::MetalRough;
 pub use microfacet::Ggx;
+pub use texture::{Image, TextureRef};
 
 use crate::math::frame::Frame;
 use crate::math::{Rgb, Vec2, Vec3A};
@@ -68,13 +70,15 @@ impl Bsdf {
     }
 }
 
-/// Surface appearance, as loaded (glTF metallic-roughness with emission).
+/// Surface appearance, as loaded (glTF metallic-roughness with emission and textures).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     /// Name, for messages and `info`.
     pub name: String,
     /// Base colour (linear).
     pub base_color: Rgb,
+    /// Base alpha (coverage), multiplied by the base-colour texture's alpha.
+    pub base_alpha: f32,
     /// Metalness in [0,1].
     pub metallic: f32,
     /// Perceptual roughness in [0,1].
@@ -85,6 +89,16 @@ pub struct Material {
     pub emission: Rgb,
     /// Emits on both sides (glTF `doubleSided`); otherwise only on the counter-clockwise side.
     pub double_sided: bool,
+    /// Multiplies the base colour (sRGB) and alpha.
+    pub base_color_texture: Option<TextureRef>,
+    /// G multiplies roughness, B metallic (linear).
+    pub metallic_roughness_texture: Option<TextureRef>,
+    /// Multiplies the emission (sRGB).
+    pub emission_texture: Option<TextureRef>,
+    /// Tangent-space normal map, with its `scale`.
+    pub normal_texture: Option<(TextureRef, f32)>,
+    /// Alpha mode MASK: surfaces with alpha below this are cut out.
+    pub alpha_cutoff: Option<f32>,
 }
 
 impl Material {
@@ -93,11 +107,17 @@ impl Material {
         Self {
             name: name.to_string(),
             base_color: albedo,
+            base_alpha: 1.0,
             metallic: 0.0,
             roughness: 1.0,
             specular: 0.0,
             emission: Rgb::ZERO,
             double_sided: true,
+            base_color_texture: None,
+            metallic_roughness_texture: None,
+            emission_texture: None,
+            normal_texture: None,
+            alpha_cutoff: None,
         }
     }
 
@@ -106,16 +126,62 @@ impl Material {
         self.emission.max_element() > 0.0
     }
 
-    /// The BSDF at a point, or `None` when the surface reflects nothing (a black emitter).
+    /// Base colour at `uv`.
     #[inline]
-    pub fn bsdf(&self) -> Option<Bsdf> {
-        if self.metallic == 0.0 && self.specular == 0.0 {
-            if self.base_color.max_element() <= 0.0 {
+    pub fn base_color_at(&self, uv: Vec2, images: &[Image]) -> Rgb {
+        match &self.base_color_texture {
+            Some(t) => self.base_color * Rgb::from(t.sample_srgb(images, uv).truncate()),
+            None => self.base_color,
+        }
+    }
+
+    /// True where an alpha-masked surface is cut out.
+    #[inline]
+    pub fn is_cut_out(&self, uv: Vec2, images: &[Image]) -> bool {
+        let Some(cutoff) = self.alpha_cutoff else { return false };
+        let alpha = self.base_alpha * self.base_color_texture.as_ref().map_or(1.0, |t| t.sample(images, uv).w);
+        alpha < cutoff
+    }
+
+    /// Emitted radiance at `uv`.
+    #[inline]
+    pub fn emission_at(&self, uv: Vec2, images: &[Image]) -> Rgb {
+        match &self.emission_texture {
+            Some(t) => self.emission * Rgb::from(t.sample_srgb(images, uv).truncate()),
+            None => self.emission,
+        }
+    }
+
+    /// The shading normal with the normal map applied. `n`: interpolated normal, `dpdu`,
+    /// `dpdv`: the triangle's position derivatives in texture space (zero without UVs).
+    #[inline]
+    pub fn mapped_normal(&self, n: Vec3A, dpdu: Vec3A, dpdv: Vec3A, uv: Vec2, images: &[Image]) -> Vec3A {
+        let Some((tex, scale)) = &self.normal_texture else { return n };
+        let Some(t) = (dpdu - n * n.dot(dpdu)).try_normalize() else { return n };
+        // Bitangent handedness follows the UV layout (mirrored UVs flip it).
+        let b = if n.cross(t).dot(dpdv) < 0.0 { -n.cross(t) } else { n.cross(t) };
+        let v = tex.sample(images, uv);
+        let (x, y, z) = ((2.0 * v.x - 1.0) * scale, (2.0 * v.y - 1.0) * scale, 2.0 * v.z - 1.0);
+        (t * x + b * y + n * z).try_normalize().unwrap_or(n)
+    }
+
+    /// The BSDF at `uv`, or `None` when the surface reflects nothing (a black emitter).
+    #[inline]
+    pub fn bsdf(&self, uv: Vec2, images: &[Image]) -> Option<Bsdf> {
+        let base = self.base_color_at(uv, images);
+        let (mut metallic, mut roughness) = (self.metallic, self.roughness);
+        if let Some(t) = &self.metallic_roughness_texture {
+            let v = t.sample(images, uv);
+            roughness *= v.y;
+            metallic *= v.z;
+        }
+        if metallic == 0.0 && self.specular == 0.0 {
+            if base.max_element() <= 0.0 {
                 return None;
             }
-            return Some(Bsdf::Diffuse(Diffuse { albedo: self.base_color }));
+            return Some(Bsdf::Diffuse(Diffuse { albedo: base }));
         }
-        Some(Bsdf::MetalRough(MetalRough::new(self.base_color, self.metallic, self.roughness, self.specular)))
+        Some(Bsdf::MetalRough(MetalRough::new(base, metallic, roughness, self.specular)))
     }
 }
 

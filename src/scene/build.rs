@@ -6,14 +6,16 @@
 
 use std::time::Instant;
 
-use super::description::{CameraPlacement, InstanceDesc, LightDesc, MeshDesc, SceneDescription};
+use std::sync::Arc;
+
+use super::description::{CameraPlacement, LightDesc, MeshDesc, SceneDescription};
 use super::{Scene, SceneStats};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
-use crate::geometry::{GeometryBuilder, NO_LIGHT};
+use crate::geometry::{Attributes, GeometryBuilder, NO_LIGHT};
 use crate::light::{AreaEmission, DistantLight, Light, PointLight, QuadLight, SpotLight, TriangleLight};
-use crate::material::Material;
-use crate::math::{Mat3, Rgb, UVec2, Vec3A};
+use crate::material::{Image, Material};
+use crate::math::{Mat3, Mat4, Rgb, UVec2, Vec3A};
 
 /// Choices made when building, usually from the command line.
 #[derive(Clone, Debug, Default)]
@@ -57,13 +59,19 @@ fn check_unit(file: &str, what: &str, name: &str, x: f32) -> Result<()> {
     Ok(())
 }
 
-fn validate_material(file: &str, m: &Material) -> Result<()> {
+fn validate_material(file: &str, m: &Material, images: usize) -> Result<()> {
     let what = format!("material '{}'", m.name);
     check_color(file, &what, "base colour", m.base_color, Some(1.0))?;
     check_color(file, &what, "emission", m.emission, None)?;
     check_unit(file, &what, "metallic", m.metallic)?;
     check_unit(file, &what, "roughness", m.roughness)?;
-    check_unit(file, &what, "specular", m.specular)
+    check_unit(file, &what, "specular", m.specular)?;
+    let textures =
+        [&m.base_color_texture, &m.metallic_roughness_texture, &m.emission_texture, &m.normal_texture.map(|n| n.0)];
+    if let Some(t) = textures.into_iter().flatten().find(|t| t.image as usize >= images) {
+        return Err(Error::scene(file, what, format!("texture uses image {}, but there are {images} images", t.image)));
+    }
+    Ok(())
 }
 
 fn validate_mesh(file: &str, index: usize, m: &MeshDesc, materials: usize) -> Result<()> {
@@ -100,72 +108,99 @@ fn finite3(file: &str, what: &str, name: &str, v: Vec3A) -> Result<()> {
     if v.is_finite() { Ok(()) } else { Err(Error::scene(file, what, format!("{name} {v} is not finite"))) }
 }
 
-/// Adds every triangle of `inst` to `geo`, creating lights for emissive ones.
-fn place_instance(
-    desc: &SceneDescription,
-    inst: &InstanceDesc,
-    geo: &mut GeometryBuilder,
-    lights: &mut Vec<Light>,
-    stats: &mut SceneStats,
-    degenerate_emitters: &mut usize,
-) {
-    let mesh = &desc.meshes[inst.mesh as usize];
-    let material = &desc.materials[mesh.material as usize];
-    let m = inst.transform;
-    let normal_matrix = Mat3::from_mat4(m).inverse().transpose();
-    // A mirroring transform reverses the winding; swap two corners to keep the front side.
-    let flip = Mat3::from_mat4(m).determinant() < 0.0;
-    let positions: Vec<Vec3A> = mesh.positions.iter().map(|&p| m.transform_point3a(p)).collect();
-    let normals: Option<Vec<Vec3A>> = mesh
-        .normals
-        .as_ref()
-        .map(|ns| ns.iter().map(|&n| Vec3A::from(normal_matrix * glam::Vec3::from(n)).normalize_or_zero()).collect());
-    let base = geo.push_vertices(normals.as_deref(), mesh.uvs.as_deref(), positions.len());
-    let has_attr = mesh.normals.is_some() || mesh.uvs.is_some();
-    let emission = AreaEmission { radiance: material.emission, two_sided: material.double_sided };
-    let emissive = material.is_emissive();
-    let corners = |t: [u32; 3]| if flip { [t[0], t[2], t[1]] } else { t };
-    stats.instances += 1;
+/// What placing meshes needs to know besides the mesh.
+struct Placer<'a> {
+    desc: &'a SceneDescription,
+    images: &'a Arc<Vec<Image>>,
+    geo: GeometryBuilder,
+    lights: Vec<Light>,
+    stats: SceneStats,
+    degenerate_emitters: usize,
+}
 
-    let push = |t: [u32; 3], light: u32, geo: &mut GeometryBuilder| {
-        let t = corners(t);
-        let attr = has_attr.then(|| (t.map(|i| base + i), mesh.normals.is_some(), mesh.uvs.is_some()));
-        geo.push_triangle(t.map(|i| positions[i as usize]), attr, mesh.material, light);
-    };
-    if emissive && mesh.quads {
-        for pair in mesh.triangles.chunks_exact(2) {
-            let [a, b, _] = pair[0].map(|i| positions[i as usize]);
-            let d = positions[pair[1][2] as usize];
-            let (e1, e2) = if flip { (d - a, b - a) } else { (b - a, d - a) };
-            let id = match QuadLight::new(a, e1, e2, emission) {
-                Some(q) => {
-                    lights.push(Light::Quad(q));
-                    stats.emissive_triangles += 2;
-                    (lights.len() - 1) as u32
-                }
-                None => {
-                    *degenerate_emitters += 2;
-                    NO_LIGHT
-                }
-            };
-            push(pair[0], id, geo);
-            push(pair[1], id, geo);
+impl Placer<'_> {
+    /// Pushes a mesh's vertex attributes (object space, or transformed by `m`).
+    fn attributes(&mut self, mesh: &MeshDesc, m: Option<Mat4>) -> Option<Attributes> {
+        if mesh.normals.is_none() && mesh.uvs.is_none() {
+            return None;
         }
-        return;
-    }
-    for &t in &mesh.triangles {
-        let mut id = NO_LIGHT;
-        if emissive {
-            match TriangleLight::new(corners(t).map(|i| positions[i as usize]), emission) {
-                Some(l) => {
-                    lights.push(Light::Triangle(l));
-                    stats.emissive_triangles += 1;
-                    id = (lights.len() - 1) as u32;
-                }
-                None => *degenerate_emitters += 1,
+        let normals: Option<Vec<Vec3A>> = mesh.normals.as_ref().map(|ns| match m {
+            Some(m) => {
+                let nm = Mat3::from_mat4(m).inverse().transpose();
+                ns.iter().map(|&n| (nm * n).normalize_or_zero()).collect()
             }
+            None => ns.clone(),
+        });
+        let base = self.geo.push_vertices(normals.as_deref(), mesh.uvs.as_deref(), mesh.positions.len());
+        Some(Attributes { base, smooth: mesh.normals.is_some(), has_uv: mesh.uvs.is_some() })
+    }
+
+    /// Adds a shared mesh once, in object space, and each of its placements.
+    fn place_shared(&mut self, mesh: &MeshDesc, transforms: &[Mat4]) {
+        let masked = self.desc.materials[mesh.material as usize].alpha_cutoff.is_some();
+        let attr = self.attributes(mesh, None);
+        let block = self.geo.add_shared_mesh(&mesh.positions, &mesh.triangles, attr, mesh.material, masked);
+        for &m in transforms {
+            self.geo.add_instance(block, m);
         }
-        push(t, id, geo);
+        self.stats.instances += transforms.len();
+    }
+
+    /// Adds every triangle of one placement to the flattened block, creating lights for
+    /// emissive ones.
+    fn place_flat(&mut self, mesh: &MeshDesc, m: Mat4) {
+        let material = &self.desc.materials[mesh.material as usize];
+        // A mirroring transform reverses the winding; swap two corners to keep the front
+        // side (glTF: the front of a negative-determinant node is its clockwise side).
+        let flip = Mat3::from_mat4(m).determinant() < 0.0;
+        let positions: Vec<Vec3A> = mesh.positions.iter().map(|&p| m.transform_point3a(p)).collect();
+        let attr = self.attributes(mesh, Some(m));
+        let emission = AreaEmission { radiance: material.emission, two_sided: material.double_sided };
+        let (emissive, masked) = (material.is_emissive(), material.alpha_cutoff.is_some());
+        let corners = |t: [u32; 3]| if flip { [t[0], t[2], t[1]] } else { t };
+        self.stats.instances += 1;
+        if emissive && mesh.quads {
+            for pair in mesh.triangles.chunks_exact(2) {
+                let [a, b, _] = pair[0].map(|i| positions[i as usize]);
+                let d = positions[pair[1][2] as usize];
+                let (e1, e2) = if flip { (d - a, b - a) } else { (b - a, d - a) };
+                let id = match QuadLight::new(a, e1, e2, emission) {
+                    Some(q) => self.add_light(Light::Quad(q), 2),
+                    None => {
+                        self.degenerate_emitters += 2;
+                        NO_LIGHT
+                    }
+                };
+                for &t in pair {
+                    let t = corners(t);
+                    self.geo.push_triangle(t.map(|i| positions[i as usize]), t, attr, mesh.material, id, masked);
+                }
+            }
+            return;
+        }
+        for &t in &mesh.triangles {
+            let t = corners(t);
+            let mut id = NO_LIGHT;
+            if emissive {
+                let light = TriangleLight::new(t.map(|i| positions[i as usize]), emission).map(|l| {
+                    match (&material.emission_texture, &mesh.uvs) {
+                        (Some(tex), Some(uvs)) => l.with_texture(*tex, t.map(|i| uvs[i as usize]), self.images.clone()),
+                        _ => l,
+                    }
+                });
+                match light {
+                    Some(l) => id = self.add_light(Light::Triangle(l), 1),
+                    None => self.degenerate_emitters += 1,
+                }
+            }
+            self.geo.push_triangle(t.map(|i| positions[i as usize]), t, attr, mesh.material, id, masked);
+        }
+    }
+
+    fn add_light(&mut self, light: Light, triangles: usize) -> u32 {
+        self.lights.push(light);
+        self.stats.emissive_triangles += triangles;
+        (self.lights.len() - 1) as u32
     }
 }
 
@@ -174,7 +209,7 @@ pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
     let start = Instant::now();
     let file = desc.source.as_str();
     for m in &desc.materials {
-        validate_material(file, m)?;
+        validate_material(file, m, desc.images.len())?;
     }
     for (i, m) in desc.meshes.iter().enumerate() {
         validate_mesh(file, i, m, desc.materials.len())?;
@@ -220,13 +255,31 @@ pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
     })?;
 
     let mut materials = desc.materials.clone();
-    let mut stats = SceneStats::default();
-    let mut lights: Vec<Light> = Vec::new();
-    let mut geo = GeometryBuilder::default();
-    let mut degenerate_emitters = 0usize;
+    let images = Arc::new(desc.images.clone());
+    let mut placer = Placer {
+        desc: &desc,
+        images: &images,
+        geo: GeometryBuilder::new(),
+        lights: Vec::new(),
+        stats: SceneStats::default(),
+        degenerate_emitters: 0,
+    };
+    // A mesh placed more than once is stored once and instanced, unless it emits (each
+    // emitting triangle is a light of its own, in world space).
+    let mut placements: Vec<Vec<Mat4>> = vec![Vec::new(); desc.meshes.len()];
     for inst in &desc.instances {
-        place_instance(&desc, inst, &mut geo, &mut lights, &mut stats, &mut degenerate_emitters);
+        placements[inst.mesh as usize].push(inst.transform);
     }
+    for (mesh, transforms) in desc.meshes.iter().zip(&placements) {
+        if transforms.len() > 1 && !desc.materials[mesh.material as usize].is_emissive() {
+            placer.place_shared(mesh, transforms);
+        } else {
+            for &m in transforms {
+                placer.place_flat(mesh, m);
+            }
+        }
+    }
+    let Placer { mut geo, mut lights, mut stats, degenerate_emitters, .. } = placer;
 
     // Lights that are not meshes.
     let mut emitter_material = None;
@@ -291,7 +344,7 @@ pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
                 });
                 let id = lights.len() as u32;
                 for t in q.triangles() {
-                    geo.push_triangle(t, None, mat, id);
+                    geo.push_triangle(t, [0, 1, 2], None, mat, id, false);
                 }
                 stats.emissive_triangles += 2;
                 Light::Quad(q)
@@ -308,10 +361,10 @@ pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
     // Bounds of everything, for directional lights and reports.
     let (mut lo, mut hi) = (Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN));
     let (geometry, _) = geo.build();
-    for t in 0..geometry.triangle_count() as u32 {
-        for v in geometry.accel.vertices(t) {
-            lo = lo.min(v);
-            hi = hi.max(v);
+    for (v, _) in geometry.world_triangles() {
+        for p in v {
+            lo = lo.min(p);
+            hi = hi.max(p);
         }
     }
     for l in &lights {
@@ -325,6 +378,7 @@ pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
 
     let accel = geometry.accel.stats();
     stats.triangles = geometry.triangle_count();
+    stats.stored_triangles = geometry.stored_triangle_count();
     stats.bvh_build_time = accel.build_time;
     stats.geometry_bytes = geometry.memory_bytes();
     stats.light_bytes = lights.capacity() * std::mem::size_of::<Light>();
@@ -335,6 +389,7 @@ pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
         camera_name: cam_desc.name.clone(),
         geometry,
         materials,
+        images,
         lights,
         center,
         radius,

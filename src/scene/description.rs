@@ -8,7 +8,7 @@
 use std::sync::Arc;
 
 use crate::light_sampler::LightSamplerKind;
-use crate::material::Material;
+use crate::material::{Image, Material};
 use crate::math::{Mat4, Rgb, UVec2, Vec2, Vec3A};
 
 /// A whole scene, before validation and acceleration-structure building.
@@ -24,6 +24,8 @@ pub struct SceneDescription {
     pub render: RenderDefaults,
     /// Materials, indexed by [`MeshDesc::material`].
     pub materials: Vec<Material>,
+    /// Decoded images, indexed by the materials' textures.
+    pub images: Vec<Image>,
     /// Triangle meshes in object space.
     pub meshes: Vec<MeshDesc>,
     /// Placements of meshes in the world.
@@ -158,4 +160,68 @@ pub enum LightDesc {
         /// Emits from both faces.
         two_sided: bool,
     },
+}
+
+impl LightDesc {
+    /// The light moved by `m` (intensities unchanged).
+    pub fn transformed(&self, m: &Mat4) -> LightDesc {
+        let dir = |d: &Vec3A| m.transform_vector3a(*d).normalize_or_zero();
+        match self {
+            LightDesc::Point { name, position, intensity } => {
+                LightDesc::Point { name: name.clone(), position: m.transform_point3a(*position), intensity: *intensity }
+            }
+            LightDesc::Spot { name, position, direction, intensity, inner_angle, outer_angle } => LightDesc::Spot {
+                name: name.clone(),
+                position: m.transform_point3a(*position),
+                direction: dir(direction),
+                intensity: *intensity,
+                inner_angle: *inner_angle,
+                outer_angle: *outer_angle,
+            },
+            LightDesc::Directional { name, direction, irradiance } => {
+                LightDesc::Directional { name: name.clone(), direction: dir(direction), irradiance: *irradiance }
+            }
+            LightDesc::Quad { name, corner, edge1, edge2, radiance, two_sided } => LightDesc::Quad {
+                name: name.clone(),
+                corner: m.transform_point3a(*corner),
+                edge1: m.transform_vector3a(*edge1),
+                edge2: m.transform_vector3a(*edge2),
+                radiance: *radiance,
+                two_sided: *two_sided,
+            },
+        }
+    }
+}
+
+impl SceneDescription {
+    /// Adds everything of `other` except its cameras and render settings, placed by
+    /// `transform`; with `material`, every mesh of `other` uses that material of `self`.
+    pub fn include(&mut self, other: SceneDescription, transform: Mat4, material: Option<u32>) {
+        let (mesh_base, material_base, image_base) =
+            (self.meshes.len() as u32, self.materials.len() as u32, self.images.len() as u32);
+        self.images.extend(other.images);
+        self.materials.extend(other.materials.into_iter().map(|mut m| {
+            for t in [&mut m.base_color_texture, &mut m.metallic_roughness_texture, &mut m.emission_texture]
+                .into_iter()
+                .flatten()
+            {
+                t.image += image_base;
+            }
+            if let Some((t, _)) = &mut m.normal_texture {
+                t.image += image_base;
+            }
+            m
+        }));
+        self.meshes.extend(other.meshes.into_iter().map(|mut m| {
+            m.material = material.unwrap_or(material_base + m.material);
+            m
+        }));
+        self.instances.extend(other.instances.into_iter().map(|i| InstanceDesc {
+            mesh: mesh_base + i.mesh,
+            transform: transform * i.transform,
+            name: i.name,
+        }));
+        self.lights.extend(other.lights.iter().map(|l| l.transformed(&transform)));
+        self.warnings.extend(other.warnings);
+    }
 }

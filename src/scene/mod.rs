@@ -14,19 +14,22 @@ pub mod shapes;
 pub use build::{BuildOptions, build};
 pub use description::SceneDescription;
 
+use std::sync::Arc;
 use std::time::Duration;
 
 use crate::camera::Camera;
 use crate::geometry::{Geometry, Ray, SurfaceHit};
 use crate::light::Light;
-use crate::material::Material;
+use crate::material::{Image, Material};
 use crate::math::Vec3A;
 
 /// Counts, sizes and timings of a built scene.
 #[derive(Clone, Debug, Default)]
 pub struct SceneStats {
-    /// Triangles in the BVH.
+    /// Triangles rendered (every instance counted).
     pub triangles: usize,
+    /// Triangles stored (a mesh shared by several instances counted once).
+    pub stored_triangles: usize,
     /// Triangles that emit (one light each, or two per quad light).
     pub emissive_triangles: usize,
     /// Mesh instances placed.
@@ -53,6 +56,8 @@ pub struct Scene {
     pub geometry: Geometry,
     /// Materials, indexed by the triangles.
     pub materials: Vec<Material>,
+    /// Images the materials' textures read (shared with textured lights).
+    pub images: Arc<Vec<Image>>,
     /// Every light; emissive triangles point into this list.
     pub lights: Vec<Light>,
     /// Centre of the bounding sphere of everything.
@@ -68,16 +73,16 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Closest surface along `ray` within `t_max`.
+    /// Closest surface along `ray` within `t_max` (alpha cut-outs let rays through).
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
-        self.geometry.intersect(ray, t_max)
+        self.geometry.intersect(ray, t_max, |m, uv| self.materials[m as usize].is_cut_out(uv, &self.images))
     }
 
     /// True when something blocks `ray` before `t_max`.
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        self.geometry.occluded(ray, t_max)
+        self.geometry.occluded(ray, t_max, |m, uv| self.materials[m as usize].is_cut_out(uv, &self.images))
     }
 
     /// Total emitted power (luminance watts) of every light.

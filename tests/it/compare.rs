@@ -25,6 +25,7 @@ fn options(out_dir: &Path, samplers: Vec<LightSamplerKind>, budget: Budget) -> C
         resolution: Some(UVec2::new(40, 30)),
         max_depth: Some(3),
         camera: None,
+        load: Default::default(),
         exposure: 0.0,
         progress: false,
     }

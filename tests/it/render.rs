@@ -208,7 +208,7 @@ fn scene_path(name: &str) -> std::path::PathBuf {
 #[test]
 fn samplers_agree_on_cornell_9x9() {
     let opts = BuildOptions { resolution: Some(UVec2::new(32, 24)), camera: None };
-    let scene = load_scene(Some(&scene_path("cornell-9x9.ron")), &opts).unwrap().scene;
+    let scene = load_scene(Some(&scene_path("cornell-9x9.ron")), &opts.clone().into()).unwrap().scene;
     let reference = render_with(&scene, LightSamplerKind::All, 64, 3, 11);
     let kinds = &ALL_KINDS[1..];
     let alpha = sidak(kinds.len());
@@ -239,7 +239,7 @@ fn same_seed_gives_identical_pixels_for_any_thread_count() {
         .map(|&threads| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             pool.install(|| {
-                let scene = load_scene(None, &opts).unwrap().scene;
+                let scene = load_scene(None, &opts.clone().into()).unwrap().scene;
                 render_with(&scene, LightSamplerKind::Power, 8, 8, 42)
             })
         })
@@ -256,7 +256,7 @@ fn same_seed_gives_identical_pixels_for_any_thread_count() {
         }
     }
     // A different seed gives a different image.
-    let scene = load_scene(None, &opts).unwrap().scene;
+    let scene = load_scene(None, &opts.clone().into()).unwrap().scene;
     let other = render_with(&scene, LightSamplerKind::Power, 8, 8, 43);
     assert!((0..24 * 18).any(|i| other.mean(i) != films[0].mean(i)));
 }
@@ -267,7 +267,7 @@ fn pass_boundaries_do_not_change_pixels() {
     // sized by the clock. Both add each pixel's samples in index order, so whatever spp the
     // timed render reached, a fixed-spp render of that many samples matches it bit for bit.
     let opts = BuildOptions { resolution: Some(UVec2::new(8, 6)), camera: None };
-    let scene = load_scene(None, &opts).unwrap().scene;
+    let scene = load_scene(None, &opts.clone().into()).unwrap().scene;
     let strategy = LightStrategy::build(LightSamplerKind::Uniform, &scene.lights, scene.radius);
     let settings = RenderSettings { budget: Budget::Spp(8), seed: 9, max_depth: 4, aovs: Default::default() };
     let mut passes = Vec::new();

@@ -18,7 +18,10 @@ fn scene(body: &str) -> String {
 }
 
 fn built(text: &str, dir: &Path) -> myriad::Result<myriad::scene::Scene> {
-    build(parse(text, "test.ron", dir)?, &BuildOptions { resolution: Some(UVec2::new(8, 6)), camera: None })
+    build(
+        parse(text, "test.ron", dir, &Default::default())?,
+        &BuildOptions { resolution: Some(UVec2::new(8, 6)), camera: None },
+    )
 }
 
 #[test]
@@ -100,6 +103,7 @@ fn missing_fields_and_bad_values_are_located() {
         &scene("objects: [ Quad(corner: (0, 0, 0), edge1: (1, 0, 0), material: \"white\") ],"),
         "x.ron",
         Path::new("."),
+        &Default::default(),
     )
     .err()
     .unwrap()
@@ -116,7 +120,7 @@ fn missing_fields_and_bad_values_are_located() {
 fn shipped_scenes_load() {
     for name in ["cornell-5x5.ron", "cornell-9x9.ron", "cornell-32x32.ron", "cornell-320x320.ron"] {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
-        let s = load_scene(Some(&path), &BuildOptions::default()).unwrap().scene;
+        let s = load_scene(Some(&path), &Default::default()).unwrap().scene;
         let n: usize = name.trim_start_matches("cornell-").split('x').next().unwrap().parse().unwrap();
         assert_eq!(s.lights.len(), n * n, "{name}");
         assert!((s.total_power() - 45.24).abs() < 0.01, "{name}: {}", s.total_power());

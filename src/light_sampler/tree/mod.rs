@@ -83,19 +83,25 @@ fn importances(node: &Node, grid: &Quantizer, ctx: &ShadingContext) -> ([f64; WI
     (imp, imp.iter().sum())
 }
 
+/// What a node costs, in light-levels, in the collapse's objective: 16 keeps trees below 60
+/// bytes per light (`street.ron` 57, `instanced_lamps.glb` 55, where 0 gives 60 and 66) for
+/// at most one more level of depth.
+const NODE_COST: u64 = 16;
+
 /// Turns the binary tree into 4-wide nodes, choosing for each node which binary
-/// descendants become its (up to four) children so that the total depth of all lights (the
-/// expected number of nodes a sample visits, if lights were picked uniformly) is smallest: a
-/// dynamic program over the cuts of the top three binary levels, memoised per binary node.
-/// Minimising the node count instead saves ~10% memory but leaves SAOH's unbalanced subtrees
-/// deep (13 levels for the 10⁴ windows of `street.ron` against 8). Every level of 4-wide
-/// nodes consumes at least one binary level, so the binary depth limit (32) bounds the trails.
+/// descendants become its (up to four) children so that Σ over lights of their depth (the
+/// expected number of nodes a sample visits, if lights were picked uniformly) plus
+/// [`NODE_COST`] per node is smallest: a dynamic program over the cuts of the top three
+/// binary levels, memoised per binary node. Minimising the node count alone leaves SAOH's
+/// unbalanced subtrees deep (13 levels for the 10⁴ windows of `street.ron` against 10).
+/// Every level of 4-wide nodes consumes at least one binary level, so the binary depth limit
+/// (32) bounds the trails.
 struct Collapser<'a> {
     bin: &'a [BinNode],
     items: &'a [Item],
     grid: Quantizer,
-    /// Smallest total depth of the lights below each binary node, counted from a 4-wide node
-    /// made for it (0 = not computed yet).
+    /// Smallest objective (light depths + node costs) below each binary node, counted from a
+    /// 4-wide node made for it (0 = not computed yet).
     cost: Vec<u64>,
     nodes: Vec<Node>,
     trails: Vec<u64>,
@@ -110,18 +116,18 @@ impl Collapser<'_> {
         }
     }
 
-    /// Smallest total depth of the lights below binary node `n`, when `n` becomes a 4-wide
-    /// node (each of its lights is one level deeper for it).
+    /// Smallest objective below binary node `n`, when `n` becomes a 4-wide node (each of its
+    /// lights is one level deeper for it, and the node costs [`NODE_COST`]).
     fn cost(&mut self, n: u32) -> u64 {
         if self.cost[n as usize] == 0 {
             let [a, b] = self.bin[n as usize].children;
             let best = (1..WIDTH).map(|j| self.slot_cost(a, j) + self.slot_cost(b, WIDTH - j)).min().unwrap();
-            self.cost[n as usize] = self.bin[n as usize].count as u64 + best;
+            self.cost[n as usize] = self.bin[n as usize].count as u64 + NODE_COST + best;
         }
         self.cost[n as usize]
     }
 
-    /// Smallest total depth below the current node when entry `c` may occupy up to `k` of its
+    /// Smallest objective below the current node when entry `c` may occupy up to `k` of its
     /// slots.
     fn slot_cost(&mut self, c: Child, k: usize) -> u64 {
         match c {

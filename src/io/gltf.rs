@@ -1,0 +1,457 @@
+//! glTF 2.0 (`.gltf`, `.glb`) → [`SceneDescription`], as Blender's exporter writes it.
+//!
+//! Reads the default scene (or the one asked for) with its whole node hierarchy (matrix or
+//! TRS transforms), every triangle primitive (strips and fans converted; points and lines
+//! skipped with one warning), the metallic-roughness materials with
+//! KHR_materials_emissive_strength, KHR_materials_specular and KHR_texture_transform, alpha
+//! masks, normal maps, perspective cameras and KHR_lights_punctual lights (intensities ×
+//! `punctual_scale`, 1/683 by default: Blender writes W·683/(4π) cd and W/m²·683 lx).
+//!
+//! Each primitive becomes one mesh, stored once however many nodes use it (instancing).
+//! Every accessor is checked (type, size, range) before it is read, so a broken file is an
+//! error naming the mesh, primitive and accessor, never a panic inside the reader. Images are
+//! decoded one by one: a missing or unreadable one is a warning and the materials that use it
+//! fall back to their factors.
+
+use std::collections::BTreeSet;
+use std::path::Path;
+use std::sync::Arc;
+
+use gltf::accessor::{DataType, Dimensions};
+use gltf::mesh::{Mode, Semantic};
+use gltf::texture::{MagFilter, WrappingMode};
+
+use super::LoadOptions;
+use super::image_file::from_rgba8;
+use crate::error::{Error, Result};
+use crate::material::texture::{UvTransform, Wrap};
+use crate::material::{Image, Material, TextureRef};
+use crate::math::{Mat4, Rgb, Vec2, Vec3A};
+use crate::scene::description::{CameraDesc, CameraPlacement, InstanceDesc, LightDesc, MeshDesc, SceneDescription};
+
+/// Extensions myriad reads. Others are listed in one warning.
+const SUPPORTED: [&str; 4] =
+    ["KHR_materials_emissive_strength", "KHR_materials_specular", "KHR_texture_transform", "KHR_lights_punctual"];
+
+/// Reads a glTF file.
+pub fn load(path: &Path, options: &LoadOptions) -> Result<SceneDescription> {
+    let file = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| parse_error(&file, &bytes, e))?;
+    let base = path.parent();
+    let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob.clone()).map_err(|e| buffer_error(&file, e))?;
+    let mut loader = Loader {
+        file: &file,
+        buffers: &buffers,
+        desc: SceneDescription { source: file.clone(), ..Default::default() },
+    };
+    let doc = &gltf.document;
+    let unsupported: Vec<&str> = doc.extensions_used().filter(|e| !SUPPORTED.contains(e)).collect();
+    if !unsupported.is_empty() {
+        loader.warn(format!("ignores the extensions {unsupported:?} (rendered without them)"));
+    }
+    let images = loader.images(doc, base);
+    loader.materials(doc, &images);
+    let primitives = loader.meshes(doc)?;
+    loader.nodes(doc, &primitives, options)?;
+    Ok(loader.desc)
+}
+
+/// A parse failure, explained: JSON syntax (line, column), GLB structure, validation (the
+/// JSON path), Draco (unsupported, say so), or not glTF at all.
+fn parse_error(file: &str, bytes: &[u8], e: gltf::Error) -> Error {
+    let first = bytes.iter().copied().find(|b| !b.is_ascii_whitespace());
+    match e {
+        gltf::Error::Deserialize(j) if !bytes.starts_with(b"glTF") && first != Some(b'{') => Error::scene(
+            file,
+            "file",
+            format!("is not a glTF file (neither binary GLB, which starts with 'glTF', nor JSON glTF): {j}"),
+        ),
+        gltf::Error::Deserialize(j) => {
+            Error::scene(file, format!("{}:{}", j.line(), j.column()), format!("invalid glTF JSON: {j}"))
+        }
+        gltf::Error::Binary(b) => Error::scene(file, "GLB container", format!("truncated or corrupt binary glTF: {b}")),
+        gltf::Error::Validation(errors) => {
+            let text: Vec<String> = errors.iter().take(5).map(|(path, err)| format!("{path}: {err}")).collect();
+            let draco = errors.iter().any(|(p, _)| p.to_string().contains("KHR_draco_mesh_compression"));
+            let message = if draco {
+                "its meshes are Draco-compressed (KHR_draco_mesh_compression), which myriad does not read; \
+                 export again with Draco compression off"
+                    .to_string()
+            } else {
+                format!("invalid glTF: {}", text.join("; "))
+            };
+            Error::scene(file, errors.first().map_or("document".into(), |(p, _)| p.to_string()), message)
+        }
+        other => Error::scene(file, "file", other.to_string()),
+    }
+}
+
+fn buffer_error(file: &str, e: gltf::Error) -> Error {
+    match e {
+        gltf::Error::BufferLength { buffer, expected, actual } => Error::scene(
+            file,
+            format!("buffers[{buffer}]"),
+            format!("holds {actual} bytes but the file declares {expected}: the file (or its .bin) is truncated"),
+        ),
+        gltf::Error::MissingBlob => {
+            Error::scene(file, "buffers[0]", "refers to the GLB's binary chunk, which is missing")
+        }
+        other => Error::scene(file, "buffers", format!("cannot be read: {other}")),
+    }
+}
+
+struct Loader<'a> {
+    file: &'a str,
+    buffers: &'a [gltf::buffer::Data],
+    desc: SceneDescription,
+}
+
+/// The glTF-to-myriad index of each image (None: failed to load).
+type ImageMap = Vec<Option<u32>>;
+
+impl Loader<'_> {
+    fn warn(&mut self, message: String) {
+        self.desc.warnings.push(format!("{}: {message}", self.file));
+    }
+
+    fn err(&self, location: impl Into<String>, message: impl Into<String>) -> Error {
+        Error::scene(self.file, location, message)
+    }
+
+    /// Decodes every image; failures become warnings.
+    fn images(&mut self, doc: &gltf::Document, base: Option<&Path>) -> ImageMap {
+        let mut map = Vec::new();
+        for img in doc.images() {
+            let name = img.name().map_or_else(|| format!("image {}", img.index()), str::to_string);
+            match gltf::image::Data::from_source(img.source(), base, self.buffers) {
+                Ok(data) => {
+                    self.desc.images.push(to_image(name, data));
+                    map.push(Some((self.desc.images.len() - 1) as u32));
+                }
+                Err(e) => {
+                    self.warn(format!(
+                        "images[{}] '{name}' cannot be read ({e}); materials using it fall back to their factors",
+                        img.index()
+                    ));
+                    map.push(None);
+                }
+            }
+        }
+        map
+    }
+
+    fn texture(
+        &mut self,
+        tex: gltf::Texture,
+        tex_coord: u32,
+        transform: Option<UvTransform>,
+        images: &ImageMap,
+    ) -> Option<TextureRef> {
+        if tex_coord != 0 {
+            self.warn(format!("textures[{}] uses TEXCOORD_{tex_coord}; myriad reads TEXCOORD_0", tex.index()));
+        }
+        let image = images.get(tex.source().index()).copied().flatten()?;
+        let wrap = |w: WrappingMode| match w {
+            WrappingMode::ClampToEdge => Wrap::Clamp,
+            WrappingMode::MirroredRepeat => Wrap::Mirror,
+            WrappingMode::Repeat => Wrap::Repeat,
+        };
+        let sampler = tex.sampler();
+        Some(TextureRef {
+            image,
+            wrap: [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())],
+            nearest: sampler.mag_filter() == Some(MagFilter::Nearest),
+            transform: transform.unwrap_or_default(),
+        })
+    }
+
+    fn info(&mut self, info: Option<gltf::texture::Info>, images: &ImageMap) -> Option<TextureRef> {
+        let info = info?;
+        let tt = info.texture_transform();
+        let transform = tt.as_ref().map(|t| UvTransform::from_khr(t.offset(), t.rotation(), t.scale()));
+        let tex_coord = tt.and_then(|t| t.tex_coord()).unwrap_or(info.tex_coord());
+        self.texture(info.texture(), tex_coord, transform, images)
+    }
+
+    fn materials(&mut self, doc: &gltf::Document, images: &ImageMap) {
+        let mut blend = Vec::new();
+        for m in doc.materials() {
+            let name = m.name().map_or_else(|| format!("material {}", m.index().unwrap_or(0)), str::to_string);
+            let pbr = m.pbr_metallic_roughness();
+            let bc = pbr.base_color_factor();
+            let normal_texture = m.normal_texture().and_then(|n| {
+                // The crate exposes no texture transform on normal textures: read the JSON.
+                let transform = n.extension_value("KHR_texture_transform").map(khr_transform_json);
+                let scale = n.scale();
+                self.texture(n.texture(), n.tex_coord(), transform, images).map(|t| (t, scale))
+            });
+            let alpha_cutoff = match m.alpha_mode() {
+                gltf::material::AlphaMode::Mask => Some(m.alpha_cutoff().unwrap_or(0.5)),
+                gltf::material::AlphaMode::Blend => {
+                    blend.push(name.clone());
+                    None
+                }
+                gltf::material::AlphaMode::Opaque => None,
+            };
+            let material = Material {
+                base_alpha: bc[3],
+                metallic: pbr.metallic_factor(),
+                roughness: pbr.roughness_factor(),
+                specular: m.specular().map_or(1.0, |s| s.specular_factor()),
+                emission: Rgb::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0),
+                double_sided: m.double_sided(),
+                base_color_texture: self.info(pbr.base_color_texture(), images),
+                metallic_roughness_texture: self.info(pbr.metallic_roughness_texture(), images),
+                emission_texture: self.info(m.emissive_texture(), images),
+                normal_texture,
+                alpha_cutoff,
+                ..Material::diffuse(&name, Rgb::new(bc[0], bc[1], bc[2]))
+            };
+            self.desc.materials.push(material);
+        }
+        if !blend.is_empty() {
+            self.warn(format!(
+                "materials {blend:?} use alpha mode BLEND, rendered opaque (MASK cut-outs are supported)"
+            ));
+        }
+        // glTF's default material, for primitives without one: white, metallic 1, roughness 1.
+        self.desc.materials.push(Material {
+            metallic: 1.0,
+            specular: 1.0,
+            ..Material::diffuse("glTF default", Rgb::ONE)
+        });
+    }
+
+    /// Checks an accessor's type and shape; its data range is checked when read.
+    fn check(&self, where_: &str, acc: &gltf::Accessor, types: &[DataType], dims: Dimensions) -> Result<()> {
+        let loc = format!("{where_}, accessor {}", acc.index());
+        if acc.count() == 0 {
+            return Err(self.err(loc, "has no elements"));
+        }
+        if !types.contains(&acc.data_type()) || acc.dimensions() != dims {
+            return Err(self
+                .err(loc, format!("is {:?} {:?}; expected {dims:?} of {types:?}", acc.dimensions(), acc.data_type())));
+        }
+        Ok(())
+    }
+
+    fn outside(&self, where_: &str, acc: &gltf::Accessor) -> Error {
+        self.err(
+            format!("{where_}, accessor {}", acc.index()),
+            "its data lies outside its buffer: the file is truncated or corrupt",
+        )
+    }
+
+    /// One mesh per triangle primitive; returns (glTF mesh, primitive) → mesh index.
+    fn meshes(&mut self, doc: &gltf::Document) -> Result<Vec<Vec<Option<u32>>>> {
+        let default_material = (self.desc.materials.len() - 1) as u32;
+        let mut skipped = BTreeSet::new();
+        let mut map = Vec::new();
+        for mesh in doc.meshes() {
+            let mut prims = Vec::new();
+            for prim in mesh.primitives() {
+                let where_ =
+                    format!("meshes[{}] '{}' primitive {}", mesh.index(), mesh.name().unwrap_or(""), prim.index());
+                if prim.extension_value("KHR_draco_mesh_compression").is_some() {
+                    return Err(self.err(
+                        where_,
+                        "is Draco-compressed (KHR_draco_mesh_compression), which myriad does not read; export with Draco off",
+                    ));
+                }
+                if !matches!(prim.mode(), Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+                    skipped.insert(format!("{} ({:?})", mesh.name().unwrap_or("unnamed"), prim.mode()));
+                    prims.push(None);
+                    continue;
+                }
+                let m = self.primitive(&where_, &prim, default_material)?;
+                self.desc.meshes.push(m);
+                prims.push(Some((self.desc.meshes.len() - 1) as u32));
+            }
+            map.push(prims);
+        }
+        if !skipped.is_empty() {
+            self.warn(format!("skips point and line primitives: {skipped:?}"));
+        }
+        Ok(map)
+    }
+
+    fn primitive(&self, where_: &str, prim: &gltf::Primitive, default_material: u32) -> Result<MeshDesc> {
+        let reader = prim.reader(|b| self.buffers.get(b.index()).map(|d| d.0.as_slice()));
+        let pos = prim.get(&Semantic::Positions).ok_or_else(|| self.err(where_, "has no POSITION attribute"))?;
+        self.check(where_, &pos, &[DataType::F32], Dimensions::Vec3)?;
+        let positions: Vec<Vec3A> =
+            reader.read_positions().ok_or_else(|| self.outside(where_, &pos))?.map(Vec3A::from).collect();
+        let n = positions.len();
+        let normals = match prim.get(&Semantic::Normals) {
+            Some(acc) => {
+                self.check(where_, &acc, &[DataType::F32], Dimensions::Vec3)?;
+                let v: Vec<Vec3A> =
+                    reader.read_normals().ok_or_else(|| self.outside(where_, &acc))?.map(Vec3A::from).collect();
+                if v.len() != n {
+                    return Err(self.err(where_, format!("has {} normals for {n} positions", v.len())));
+                }
+                Some(v)
+            }
+            None => None,
+        };
+        let uvs = match prim.get(&Semantic::TexCoords(0)) {
+            Some(acc) => {
+                self.check(where_, &acc, &[DataType::F32, DataType::U8, DataType::U16], Dimensions::Vec2)?;
+                let v: Vec<Vec2> = reader
+                    .read_tex_coords(0)
+                    .ok_or_else(|| self.outside(where_, &acc))?
+                    .into_f32()
+                    .map(Vec2::from)
+                    .collect();
+                if v.len() != n {
+                    return Err(self.err(where_, format!("has {} texture coordinates for {n} positions", v.len())));
+                }
+                Some(v)
+            }
+            None => None,
+        };
+        let indices: Vec<u32> = match prim.indices() {
+            Some(acc) => {
+                self.check(where_, &acc, &[DataType::U8, DataType::U16, DataType::U32], Dimensions::Scalar)?;
+                let idx: Vec<u32> =
+                    reader.read_indices().ok_or_else(|| self.outside(where_, &acc))?.into_u32().collect();
+                if let Some(bad) = idx.iter().find(|&&i| i as usize >= n) {
+                    return Err(self.err(
+                        format!("{where_}, accessor {}", acc.index()),
+                        format!("index {bad} is out of range: the primitive has {n} vertices"),
+                    ));
+                }
+                idx
+            }
+            None => (0..n as u32).collect(),
+        };
+        let triangles: Vec<[u32; 3]> = match prim.mode() {
+            Mode::TriangleStrip => (0..indices.len().saturating_sub(2))
+                .map(|i| {
+                    let (a, b, c) = (indices[i], indices[i + 1], indices[i + 2]);
+                    if i % 2 == 0 { [a, b, c] } else { [b, a, c] }
+                })
+                .collect(),
+            Mode::TriangleFan => {
+                (1..indices.len().saturating_sub(1)).map(|i| [indices[0], indices[i], indices[i + 1]]).collect()
+            }
+            _ => indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+        };
+        // Strips restart with repeated indices: drop those empty triangles.
+        let triangles = triangles.into_iter().filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]).collect();
+        let material = prim.material().index().map_or(default_material, |i| i as u32);
+        Ok(MeshDesc { name: where_.to_string(), positions, normals, uvs, triangles, material, quads: false })
+    }
+
+    fn nodes(&mut self, doc: &gltf::Document, primitives: &[Vec<Option<u32>>], options: &LoadOptions) -> Result<()> {
+        let scene = match options.gltf_scene {
+            Some(k) => doc.scenes().nth(k).ok_or_else(|| {
+                self.err("scenes", format!("has no scene {k}: the file holds {} (numbered from 0)", doc.scenes().len()))
+            })?,
+            None => doc
+                .default_scene()
+                .or_else(|| doc.scenes().next())
+                .ok_or_else(|| self.err("scenes", "the file holds no scene"))?,
+        };
+        let mut stack: Vec<(gltf::Node, Mat4, usize)> = scene.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+        let (mut range_warned, mut ortho) = (false, Vec::new());
+        let limit = doc.nodes().len();
+        while let Some((node, parent, depth)) = stack.pop() {
+            if depth > limit {
+                return Err(self.err(format!("nodes[{}]", node.index()), "the node hierarchy has a cycle"));
+            }
+            let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+            let name = node.name().map_or_else(|| format!("node {}", node.index()), str::to_string);
+            if let Some(mesh) = node.mesh() {
+                for m in primitives[mesh.index()].iter().flatten() {
+                    self.desc.instances.push(InstanceDesc { mesh: *m, transform: world, name: name.clone() });
+                }
+            }
+            if let Some(cam) = node.camera() {
+                match cam.projection() {
+                    gltf::camera::Projection::Perspective(p) => self.desc.cameras.push(CameraDesc {
+                        name: name.clone(),
+                        placement: CameraPlacement::Matrix(world),
+                        yfov: p.yfov(),
+                        aspect_ratio: p.aspect_ratio(),
+                    }),
+                    gltf::camera::Projection::Orthographic(_) => ortho.push(name.clone()),
+                }
+            }
+            if let Some(light) = node.light() {
+                range_warned |= light.range().is_some();
+                let label: Arc<str> = Arc::from(light.name().unwrap_or(&name));
+                let position = Vec3A::from(world.w_axis.truncate());
+                let direction = (-Vec3A::from(world.z_axis.truncate())).normalize_or_zero();
+                let power = Rgb::from(light.color()) * (light.intensity() * options.punctual_scale);
+                self.desc.lights.push(match light.kind() {
+                    gltf::khr_lights_punctual::Kind::Point => {
+                        LightDesc::Point { name: label, position, intensity: power }
+                    }
+                    gltf::khr_lights_punctual::Kind::Spot { inner_cone_angle, outer_cone_angle } => LightDesc::Spot {
+                        name: label,
+                        position,
+                        direction,
+                        intensity: power,
+                        inner_angle: inner_cone_angle,
+                        outer_angle: outer_cone_angle,
+                    },
+                    gltf::khr_lights_punctual::Kind::Directional => {
+                        LightDesc::Directional { name: label, direction, irradiance: power }
+                    }
+                });
+            }
+            stack.extend(node.children().map(|c| (c, world, depth + 1)));
+        }
+        if range_warned {
+            self.warn("punctual light `range` is ignored: light falls off with the inverse square of distance".into());
+        }
+        if !ortho.is_empty() {
+            self.warn(format!("orthographic cameras {ortho:?} are not supported and were skipped"));
+        }
+        Ok(())
+    }
+}
+
+/// KHR_texture_transform from raw extension JSON (for normal textures).
+fn khr_transform_json(v: &gltf::json::Value) -> UvTransform {
+    let pair = |k: &str, d: f32| {
+        v.get(k).and_then(|a| a.as_array()).map_or([d, d], |a| {
+            [
+                a.first().and_then(|x| x.as_f64()).unwrap_or(d as f64) as f32,
+                a.get(1).and_then(|x| x.as_f64()).unwrap_or(d as f64) as f32,
+            ]
+        })
+    };
+    let rotation = v.get("rotation").and_then(|r| r.as_f64()).unwrap_or(0.0) as f32;
+    UvTransform::from_khr(pair("offset", 0.0), rotation, pair("scale", 1.0))
+}
+
+/// glTF's decoded pixels (any of its formats) as 8-bit RGBA.
+fn to_image(name: String, data: gltf::image::Data) -> Image {
+    use gltf::image::Format::*;
+    let p = &data.pixels;
+    let u16_at = |i: usize| u16::from_le_bytes([p[2 * i], p[2 * i + 1]]);
+    let f32_at = |i: usize| f32::from_le_bytes([p[4 * i], p[4 * i + 1], p[4 * i + 2], p[4 * i + 3]]);
+    let texels = (data.width * data.height) as usize;
+    let rgba: Vec<u8> = (0..texels)
+        .flat_map(|t| -> [u8; 4] {
+            let hi = |i: usize| (u16_at(i) >> 8) as u8;
+            let fl = |i: usize| (f32_at(i).clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
+            match data.format {
+                R8 => [p[t], p[t], p[t], 255],
+                R8G8 => [p[2 * t], p[2 * t], p[2 * t], p[2 * t + 1]],
+                R8G8B8 => [p[3 * t], p[3 * t + 1], p[3 * t + 2], 255],
+                R8G8B8A8 => [p[4 * t], p[4 * t + 1], p[4 * t + 2], p[4 * t + 3]],
+                R16 => [hi(t), hi(t), hi(t), 255],
+                R16G16 => [hi(2 * t), hi(2 * t), hi(2 * t), hi(2 * t + 1)],
+                R16G16B16 => [hi(3 * t), hi(3 * t + 1), hi(3 * t + 2), 255],
+                R16G16B16A16 => [hi(4 * t), hi(4 * t + 1), hi(4 * t + 2), hi(4 * t + 3)],
+                R32G32B32FLOAT => [fl(3 * t), fl(3 * t + 1), fl(3 * t + 2), 255],
+                R32G32B32A32FLOAT => [fl(4 * t), fl(4 * t + 1), fl(4 * t + 2), fl(4 * t + 3)],
+            }
+        })
+        .collect();
+    from_rgba8(name, data.width, data.height, rgba)
+}
