@@ -20,7 +20,7 @@ fn bench(c: &mut Criterion) {
     group.sample_size(10);
     for name in ["cornell-5x5.ron", "cornell-9x9.ron", "cornell-32x32.ron"] {
         let s = scene(name, UVec2::new(80, 60));
-        for kind in [LightSamplerKind::All, LightSamplerKind::Uniform, LightSamplerKind::Power] {
+        for kind in LightSamplerKind::ALL {
             if kind == LightSamplerKind::All && s.lights.len() > 100 {
                 continue;
             }

@@ -59,7 +59,7 @@ enum Command {
     Info {
         /// Scene file (.ron, .obj, .gltf or .glb); default: the built-in Cornell box.
         scene: Option<PathBuf>,
-        /// Camera to use, by name.
+        /// Camera to use, by name (default: the scene's first); `auto` frames the whole scene.
         #[arg(long)]
         camera: Option<String>,
         #[command(flatten)]
@@ -95,7 +95,8 @@ struct RenderArgs {
     /// Direct lighting only (same as --max-depth 1): isolates the light sampler's noise.
     #[arg(long)]
     direct_only: bool,
-    /// Camera to use, by name.
+    /// Camera to use, by name (default: the scene's first); `auto` frames the whole scene
+    /// from the front (for OBJ files, which carry no camera).
     #[arg(long)]
     camera: Option<String>,
     /// PNG preview path (default: the EXR path with .png).
@@ -154,7 +155,8 @@ struct CompareArgs {
     /// Direct lighting only (same as --max-depth 1).
     #[arg(long)]
     direct_only: bool,
-    /// Camera to use, by name.
+    /// Camera to use, by name (default: the scene's first); `auto` frames the whole scene
+    /// from the front (for OBJ files, which carry no camera).
     #[arg(long)]
     camera: Option<String>,
     /// Exposure of the previews, in stops.

@@ -30,11 +30,17 @@ impl fmt::Display for InfoReport {
         let res = s.camera.resolution();
         writeln!(f, "scene        {}", s.source)?;
         writeln!(f, "camera       '{}', {} × {} px", s.camera_name, res.x, res.y)?;
+        writeln!(
+            f,
+            "cameras      {}{}",
+            st.cameras.len(),
+            if st.cameras.is_empty() { String::new() } else { format!(" ({})", st.cameras.join(", ")) }
+        )?;
         writeln!(f, "bounds       centre {:.3}, radius {:.3} m", s.center, s.radius)?;
         writeln!(
             f,
-            "triangles    {} ({} emissive) in {} instances",
-            st.triangles, st.emissive_triangles, st.instances
+            "triangles    {} ({} emissive, {} stored) in {} instances of {} meshes",
+            st.triangles, st.emissive_triangles, st.stored_triangles, st.instances, st.meshes
         )?;
         writeln!(f, "materials    {}", s.materials.len())?;
         let mut kinds: BTreeMap<&str, usize> = BTreeMap::new();

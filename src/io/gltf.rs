@@ -123,7 +123,11 @@ impl Loader<'_> {
     fn images(&mut self, doc: &gltf::Document, base: Option<&Path>) -> ImageMap {
         let mut map = Vec::new();
         for img in doc.images() {
-            let name = img.name().map_or_else(|| format!("image {}", img.index()), str::to_string);
+            let name = match (img.name(), img.source()) {
+                (Some(name), _) => name.to_string(),
+                (None, gltf::image::Source::Uri { uri, .. }) if !uri.starts_with("data:") => uri.to_string(),
+                (None, _) => format!("image {}", img.index()),
+            };
             match gltf::image::Data::from_source(img.source(), base, self.buffers) {
                 Ok(data) => {
                     self.desc.images.push(to_image(name, data));

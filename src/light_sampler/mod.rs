@@ -67,6 +67,15 @@ pub enum LightSamplerKind {
 }
 
 impl LightSamplerKind {
+    /// Every sampler, cheapest selection first (after `all`).
+    pub const ALL: [LightSamplerKind; 5] = [
+        LightSamplerKind::All,
+        LightSamplerKind::Uniform,
+        LightSamplerKind::Power,
+        LightSamplerKind::Local,
+        LightSamplerKind::Tree,
+    ];
+
     /// The name used on the command line and in file headers.
     pub fn name(self) -> &'static str {
         match self {

@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use std::sync::Arc;
 
-use super::description::{CameraPlacement, LightDesc, MeshDesc, SceneDescription};
+use super::description::{CameraDesc, CameraPlacement, LightDesc, MeshDesc, SceneDescription};
 use super::{Scene, SceneStats};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
@@ -224,35 +224,30 @@ pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
         }
     }
 
-    // Camera and resolution.
-    let cam_desc = match &opts.camera {
-        Some(name) => desc.cameras.iter().find(|c| &c.name == name).ok_or_else(|| {
+    // Camera and resolution (`auto` is placed once the scene's bounds are known).
+    let cam_desc = match opts.camera.as_deref() {
+        Some(AUTO_CAMERA) => None,
+        Some(name) => Some(desc.cameras.iter().find(|c| c.name == name).ok_or_else(|| {
             let names: Vec<&str> = desc.cameras.iter().map(|c| c.name.as_str()).collect();
-            Error::scene(file, "cameras", format!("no camera named '{name}'; the scene has {names:?}"))
-        })?,
-        None => desc.cameras.first().ok_or_else(|| {
             Error::scene(
                 file,
                 "cameras",
-                "the scene has no camera; add one (in Blender: a camera object, exported with 'Cameras' on)",
+                format!("no camera named '{name}'; the scene has {names:?} (or pass --camera auto)"),
             )
-        })?,
+        })?),
+        None => Some(desc.cameras.first().ok_or_else(|| {
+            Error::scene(
+                file,
+                "cameras",
+                "the scene has no camera; add one (in Blender: a camera object, exported with 'Cameras' on), \
+                 or pass --camera auto to frame the whole scene",
+            )
+        })?),
     };
     let resolution = opts.resolution.or(desc.resolution).unwrap_or_else(|| {
-        let aspect = cam_desc.aspect_ratio.filter(|a| *a > 0.0 && a.is_finite()).unwrap_or(4.0 / 3.0);
+        let aspect = cam_desc.and_then(|c| c.aspect_ratio).filter(|a| *a > 0.0 && a.is_finite()).unwrap_or(4.0 / 3.0);
         UVec2::new(DEFAULT_WIDTH, ((DEFAULT_WIDTH as f32 / aspect).round() as u32).max(1))
     });
-    let camera = match cam_desc.placement {
-        CameraPlacement::LookAt { eye, target, up } => Camera::look_at(eye, target, up, cam_desc.yfov, resolution),
-        CameraPlacement::Matrix(m) => Camera::from_matrix(&m, cam_desc.yfov, resolution),
-    }
-    .ok_or_else(|| {
-        Error::scene(
-            file,
-            format!("camera '{}'", cam_desc.name),
-            "degenerate: eye equals target, up is parallel to the view, or the field of view is not in (0°, 180°)",
-        )
-    })?;
 
     let mut materials = desc.materials.clone();
     let images = Arc::new(desc.images.clone());
@@ -376,7 +371,14 @@ pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
     let (center, radius) =
         if lo.x <= hi.x { (0.5 * (lo + hi), (0.5 * (hi - lo).length()).max(1e-3)) } else { (Vec3A::ZERO, 1.0) };
 
+    let (camera, camera_name) = match cam_desc {
+        Some(c) => (scene_camera(file, c, resolution)?, c.name.clone()),
+        None => (auto_camera(center, radius, resolution), AUTO_CAMERA.to_string()),
+    };
+
     let accel = geometry.accel.stats();
+    stats.meshes = desc.meshes.len();
+    stats.cameras = desc.cameras.iter().map(|c| c.name.clone()).collect();
     stats.triangles = geometry.triangle_count();
     stats.stored_triangles = geometry.stored_triangle_count();
     stats.bvh_build_time = accel.build_time;
@@ -386,7 +388,7 @@ pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
     Ok(Scene {
         source: desc.source.clone(),
         camera,
-        camera_name: cam_desc.name.clone(),
+        camera_name,
         geometry,
         materials,
         images,
@@ -397,4 +399,37 @@ pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
         stats,
         warnings,
     })
+}
+
+/// The `--camera` value that frames the whole scene instead of using one of its cameras.
+pub const AUTO_CAMERA: &str = "auto";
+
+/// The field of view of the `auto` camera, in degrees.
+const AUTO_YFOV_DEG: f32 = 40.0;
+
+/// A scene camera at the given resolution, or an error naming it when it is degenerate.
+fn scene_camera(file: &str, c: &CameraDesc, resolution: UVec2) -> Result<Camera> {
+    match c.placement {
+        CameraPlacement::LookAt { eye, target, up } => Camera::look_at(eye, target, up, c.yfov, resolution),
+        CameraPlacement::Matrix(m) => Camera::from_matrix(&m, c.yfov, resolution),
+    }
+    .ok_or_else(|| {
+        Error::scene(
+            file,
+            format!("camera '{}'", c.name),
+            "degenerate: eye equals target, up is parallel to the view, or the field of view is not in (0°, 180°)",
+        )
+    })
+}
+
+/// A camera on +Z looking down −Z at the centre of the scene's bounding sphere, slightly from
+/// above, far enough back that the whole sphere fits the narrower field of view.
+fn auto_camera(center: Vec3A, radius: f32, resolution: UVec2) -> Camera {
+    let yfov = AUTO_YFOV_DEG.to_radians();
+    let aspect = resolution.x as f32 / resolution.y as f32;
+    let half = (0.5 * yfov).tan().min((0.5 * yfov).tan() * aspect).atan();
+    let distance = radius / half.sin();
+    let dir = Vec3A::new(0.0, 0.25, 1.0).normalize();
+    Camera::look_at(center + distance * dir, center, Vec3A::Y, yfov, resolution)
+        .expect("the auto camera has a finite, non-degenerate placement")
 }

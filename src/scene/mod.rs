@@ -11,7 +11,7 @@ pub mod description;
 pub mod format;
 pub mod shapes;
 
-pub use build::{BuildOptions, build};
+pub use build::{AUTO_CAMERA, BuildOptions, build};
 pub use description::SceneDescription;
 
 use std::sync::Arc;
@@ -34,6 +34,10 @@ pub struct SceneStats {
     pub emissive_triangles: usize,
     /// Mesh instances placed.
     pub instances: usize,
+    /// Distinct meshes in the description (a glTF primitive, an OBJ group, a RON shape).
+    pub meshes: usize,
+    /// Names of the cameras the scene defines.
+    pub cameras: Vec<String>,
     /// Time to build the BVH.
     pub bvh_build_time: Duration,
     /// Time for the whole build (validation, flattening, lights, BVH).

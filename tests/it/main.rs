@@ -4,6 +4,7 @@ mod bsdfs;
 mod cli;
 mod common;
 mod compare;
+mod formats;
 mod light_samplers;
 mod render;
 mod scene_loading;

@@ -12,13 +12,7 @@ use myriad::scene::description::LightDesc;
 use myriad::scene::shapes::{box_mesh, quad_mesh};
 use myriad::scene::{BuildOptions, Scene};
 
-pub const ALL_KINDS: [LightSamplerKind; 5] = [
-    LightSamplerKind::All,
-    LightSamplerKind::Uniform,
-    LightSamplerKind::Power,
-    LightSamplerKind::Local,
-    LightSamplerKind::Tree,
-];
+pub const ALL_KINDS: [LightSamplerKind; 5] = LightSamplerKind::ALL;
 
 pub fn render_with(scene: &Scene, kind: LightSamplerKind, spp: u32, max_depth: u32, seed: u64) -> Film {
     let strategy = LightStrategy::build(kind, &scene.lights, scene.radius);

@@ -1,0 +1,202 @@
+#![allow(missing_docs)] // criterion_group! generates undocumented items
+//! Scene loading and ray tracing at scale (`cargo bench --bench scenes`):
+//! - `gltf_load`: reading and building (lights, BVH) a glTF with 5000 separately exported
+//!   emissive quads, each its own mesh, material and node (what Blender writes for 5000 lamp
+//!   objects), and one with a 10⁶-triangle emissive mesh;
+//! - `bvh_build`: the BVH over 10⁵ and 10⁶ triangles;
+//! - `trace`: closest-hit and occlusion queries of incoherent rays (random origins above a
+//!   bumpy surface, cosine-distributed directions), 10⁵ and 10⁶ triangles.
+//!
+//! The generated files stay in `target/bench-scenes/` for use with `myriad info` and
+//! `myriad render`.
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use myriad::commands::load_scene;
+use myriad::geometry::Ray;
+use myriad::math::{UVec2, Vec3A};
+use myriad::sampling::{Dim, SampleStream};
+use myriad::scene::{BuildOptions, Scene};
+use serde_json::{Value, json};
+use std::hint::black_box;
+use std::path::{Path, PathBuf};
+
+fn out_dir() -> PathBuf {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/bench-scenes");
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A glTF document around one binary buffer stored next to it as `NAME.bin`.
+fn write_gltf(name: &str, mut doc: Value, blob: &[u8]) -> PathBuf {
+    let dir = out_dir();
+    std::fs::write(dir.join(format!("{name}.bin")), blob).unwrap();
+    doc["asset"] = json!({"version": "2.0", "generator": "myriad benches/scenes.rs"});
+    doc["extensionsUsed"] = json!(["KHR_materials_emissive_strength"]);
+    doc["buffers"] = json!([{"byteLength": blob.len(), "uri": format!("{name}.bin")}]);
+    doc["cameras"] = json!([{"type": "perspective", "perspective": {"yfov": 0.9, "aspectRatio": 1.333, "znear": 0.1}}]);
+    let nodes = doc["nodes"].as_array_mut().unwrap();
+    nodes.push(json!({"name": "Camera", "camera": 0, "translation": [0.0, 6.0, 22.0]}));
+    doc["scenes"] = json!([{"nodes": (0..nodes.len()).collect::<Vec<_>>()}]);
+    let path = dir.join(format!("{name}.gltf"));
+    std::fs::write(&path, doc.to_string()).unwrap();
+    path
+}
+
+fn push_f32s(blob: &mut Vec<u8>, values: impl IntoIterator<Item = f32>) {
+    for v in values {
+        blob.extend_from_slice(&v.to_le_bytes());
+    }
+}
+
+/// An emissive material with glTF's factor × strength.
+fn emitter(name: String, rgb: [f32; 3], strength: f32) -> Value {
+    json!({"name": name, "emissiveFactor": rgb,
+           "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0]},
+           "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": strength}}})
+}
+
+/// `n` ceiling lamps (0.1 m quads facing down at 4 m), each its own mesh, material and node.
+fn lamps(n: usize) -> PathBuf {
+    let mut blob = Vec::new();
+    // One shared quad (positions + indices) in the node's local frame.
+    push_f32s(&mut blob, [-0.05, 0.0, -0.05, 0.05, 0.0, -0.05, 0.05, 0.0, 0.05, -0.05, 0.0, 0.05]);
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        blob.extend_from_slice(&i.to_le_bytes());
+    }
+    let side = (n as f32).sqrt().ceil() as usize;
+    let (mut meshes, mut materials, mut nodes) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..n {
+        let s = SampleStream::new(5, i as u64, 0).get_2d(0, Dim::LightSelect, 0);
+        materials.push(emitter(format!("lamp.{i:04}"), [1.0, 0.6 + 0.4 * s.x, 0.3 + 0.7 * s.y], 20.0));
+        // Blender writes one mesh per object, each with its own accessors; these share them.
+        meshes.push(json!({"name": format!("Lamp.{i:04}"),
+                           "primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": i}]}));
+        let (x, z) = ((i % side) as f32, (i / side) as f32);
+        let t = [(x / side as f32 - 0.5) * 20.0, 4.0, (z / side as f32 - 0.5) * 20.0];
+        nodes.push(json!({"name": format!("Lamp.{i:04}"), "mesh": i, "translation": t}));
+    }
+    let doc = json!({
+        "scene": 0, "nodes": nodes, "meshes": meshes, "materials": materials,
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+             "min": [-0.05, 0.0, -0.05], "max": [0.05, 0.0, 0.05]},
+            {"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
+                        {"buffer": 0, "byteOffset": 48, "byteLength": 12}],
+    });
+    write_gltf(&format!("lamps_{n}"), doc, &blob)
+}
+
+/// One indexed mesh of `n` triangles: a bumpy 20 m × 20 m surface, emissive when asked.
+fn surface(n: usize, emissive: bool) -> PathBuf {
+    let cols = ((n / 2) as f32).sqrt().ceil() as usize;
+    let rows = (n / 2).div_ceil(cols);
+    let (w, h) = (cols + 1, rows + 1);
+    let mut blob = Vec::new();
+    let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
+    for r in 0..h {
+        for c in 0..w {
+            let s = SampleStream::new(9, (r * w + c) as u64, 0).get_1d(0, Dim::LightSelect, 0);
+            let p = [(c as f32 / cols as f32 - 0.5) * 20.0, 0.3 * s, (r as f32 / rows as f32 - 0.5) * 20.0];
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+            push_f32s(&mut blob, p);
+        }
+    }
+    let positions = blob.len();
+    let mut count = 0;
+    'quads: for r in 0..rows {
+        for c in 0..cols {
+            let v = (r * w + c) as u32;
+            for tri in [[v, v + w as u32, v + 1], [v + 1, v + w as u32, v + w as u32 + 1]] {
+                if count == n {
+                    break 'quads;
+                }
+                tri.iter().for_each(|i| blob.extend_from_slice(&i.to_le_bytes()));
+                count += 1;
+            }
+        }
+    }
+    let material = if emissive {
+        emitter("glow".into(), [1.0, 0.8, 0.6], 2.0)
+    } else {
+        json!({"name": "grey", "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1.0]}})
+    };
+    let doc = json!({
+        "scene": 0, "materials": [material],
+        "nodes": [{"name": "Surface", "mesh": 0}],
+        "meshes": [{"name": "Surface", "primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": w * h, "type": "VEC3", "min": lo, "max": hi},
+            {"bufferView": 1, "componentType": 5125, "count": 3 * n, "type": "SCALAR"}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": positions},
+                        {"buffer": 0, "byteOffset": positions, "byteLength": blob.len() - positions}],
+    });
+    let name = if emissive { format!("emissive_surface_{n}") } else { format!("surface_{n}") };
+    write_gltf(&name, doc, &blob)
+}
+
+fn load(path: &Path) -> Scene {
+    let options = BuildOptions { resolution: Some(UVec2::new(64, 48)), camera: None };
+    load_scene(Some(path), &options.into()).unwrap().scene
+}
+
+fn gltf_load(c: &mut Criterion) {
+    let mut group = c.benchmark_group("gltf_load");
+    group.sample_size(10);
+    for (label, path) in [("5000 lamp objects", lamps(5000)), ("1M emissive triangles", surface(1_000_000, true))] {
+        group.bench_function(label, |b| b.iter(|| load(black_box(&path)).stats.triangles));
+    }
+    group.finish();
+}
+
+fn bvh_build(c: &mut Criterion) {
+    let mut group = c.benchmark_group("bvh_build");
+    group.sample_size(10);
+    for n in [100_000usize, 1_000_000] {
+        let desc = myriad::io::load_scene(&surface(n, false), &Default::default()).unwrap();
+        let options = BuildOptions { resolution: Some(UVec2::new(64, 48)), camera: None };
+        group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| myriad::scene::build(desc.clone(), &options).unwrap().stats.bvh_build_time)
+        });
+    }
+    group.finish();
+}
+
+/// Incoherent rays: origins 0.5–3 m above the surface, directions uniform over the sphere.
+fn rays(count: usize) -> Vec<Ray> {
+    (0..count)
+        .map(|i| {
+            let s = SampleStream::new(11, i as u64, 0);
+            let (p, d) = (s.get_2d(0, Dim::PixelJitter, 0), s.get_2d(0, Dim::BsdfDirection, 0));
+            let q = s.get_1d(0, Dim::LightSelect, 0);
+            let origin = Vec3A::new(p.x * 18.0 - 9.0, 0.5 + 2.5 * q, p.y * 18.0 - 9.0);
+            let (z, phi) = (1.0 - 2.0 * d.x, std::f32::consts::TAU * d.y);
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            Ray::new(origin, Vec3A::new(r * phi.cos(), z, r * phi.sin()))
+        })
+        .collect()
+}
+
+fn trace(c: &mut Criterion) {
+    const RAYS: usize = 100_000;
+    let rays = rays(RAYS);
+    let mut group = c.benchmark_group("trace");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements(RAYS as u64));
+    for n in [100_000usize, 1_000_000] {
+        let scene = load(&surface(n, false));
+        group.bench_with_input(BenchmarkId::new("closest", n), &n, |b, _| {
+            b.iter(|| rays.iter().filter(|r| scene.intersect(r, f32::INFINITY).is_some()).count())
+        });
+        group.bench_with_input(BenchmarkId::new("occluded", n), &n, |b, _| {
+            b.iter(|| rays.iter().filter(|r| scene.occluded(r, 5.0)).count())
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, gltf_load, bvh_build, trace);
+criterion_main!(benches);

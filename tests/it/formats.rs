@@ -1,0 +1,240 @@
+//! glTF and OBJ import: Blender's own exports load with the counts their README gives and
+//! render what Cycles renders; one Cornell box written as RON, OBJ/MTL and glTF renders alike;
+//! broken files are clear errors naming the file and the element.
+
+use crate::render::{compare_films, render_with};
+use myriad::commands::{SceneOptions, load_scene};
+use myriad::io::LoadOptions;
+use myriad::light_sampler::LightSamplerKind;
+use myriad::math::UVec2;
+use myriad::scene::{AUTO_CAMERA, BuildOptions, Scene};
+use serde_json::{Value, json};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+fn blender(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/blender").join(name)
+}
+
+fn cornell(ext: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/cornell/cornell").with_extension(ext)
+}
+
+fn load(path: &Path, resolution: Option<UVec2>, camera: Option<&str>) -> myriad::Result<Scene> {
+    let options = SceneOptions {
+        load: LoadOptions::default(),
+        build: BuildOptions { resolution, camera: camera.map(String::from) },
+    };
+    load_scene(Some(path), &options).map(|l| l.scene)
+}
+
+fn light_kinds(scene: &Scene) -> BTreeMap<&'static str, usize> {
+    let mut kinds = BTreeMap::new();
+    for l in &scene.lights {
+        *kinds.entry(l.kind_name()).or_default() += 1;
+    }
+    kinds
+}
+
+/// Lights by kind, e.g. `[("point", 1)]`.
+type LightCounts = &'static [(&'static str, usize)];
+
+/// (file, meshes, mesh nodes, triangles, emissive triangles, lights by kind), from the
+/// README of `../shared/assets/blender/`.
+const BLENDER_FILES: [(&str, usize, usize, usize, usize, LightCounts); 4] = [
+    ("cornell_grid_7.glb", 56, 56, 132, 98, &[("triangle", 98)]),
+    ("panels.glb", 7, 7, 24, 8, &[("triangle", 8)]),
+    ("punctual.glb", 2, 2, 14, 0, &[("directional", 1), ("point", 1), ("spot", 1)]),
+    ("instanced_lamps.glb", 2, 401, 4802, 4800, &[("triangle", 4800)]),
+];
+
+#[test]
+fn blender_exports_load_with_the_counts_of_their_readme() {
+    for (file, meshes, instances, triangles, emissive, lights) in BLENDER_FILES {
+        let scene = load(&blender(file), None, None).unwrap_or_else(|e| panic!("{file}: {e}"));
+        let st = &scene.stats;
+        assert_eq!(
+            (st.meshes, st.instances, st.triangles, st.emissive_triangles),
+            (meshes, instances, triangles, emissive),
+            "{file}"
+        );
+        assert_eq!(light_kinds(&scene), lights.iter().copied().collect(), "{file}");
+        assert_eq!(st.cameras, ["Camera"], "{file}");
+        assert_eq!(scene.camera.resolution(), UVec2::new(640, 480), "{file}: 4:3 from aspectRatio");
+        assert!(scene.warnings.is_empty(), "{file}: {:?}", scene.warnings);
+    }
+    // One emissive box mesh placed 400 times: each placement is 12 lights of its own, and the
+    // two meshes are stored once each.
+    let inst = load(&blender("instanced_lamps.glb"), None, None).unwrap();
+    assert_eq!(inst.stats.stored_triangles, 4802);
+}
+
+/// The image means of Cycles's renders of these files (their README), and how close ours must
+/// come. Cycles's own noise at 1024 spp is about 0.3 % on the mean. `punctual` differs in the
+/// spot's penumbra: myriad follows the KHR_lights_punctual falloff, Cycles its smoothstep blend.
+const CYCLES_MEANS: [(&str, [f32; 3], f32); 4] = [
+    ("cornell_grid_7.glb", [0.6508, 0.6258, 0.5628], 0.02),
+    ("panels.glb", [0.2505, 0.2435, 0.2309], 0.02),
+    ("punctual.glb", [0.2676, 0.2341, 0.2006], 0.05),
+    ("instanced_lamps.glb", [1.1359, 0.8519, 0.4543], 0.02),
+];
+
+#[test]
+fn blender_exports_render_what_cycles_renders() {
+    for (file, cycles, tolerance) in CYCLES_MEANS {
+        let scene = load(&blender(file), Some(UVec2::new(64, 48)), None).unwrap();
+        let film = render_with(&scene, LightSamplerKind::Tree, 64, 8, 1);
+        let means = film.means();
+        let mean = means.iter().fold(myriad::math::Rgb::ZERO, |a, &b| a + b) / means.len() as f32;
+        for c in 0..3 {
+            let ratio = mean[c] / cycles[c];
+            assert!((ratio - 1.0).abs() < tolerance, "{file}: channel {c} mean {} vs Cycles {}", mean[c], cycles[c]);
+        }
+    }
+}
+
+#[test]
+fn one_cornell_box_as_ron_obj_and_gltf_renders_alike() {
+    // The OBJ has no camera, so all three are framed by `--camera auto`: the same bounds give
+    // the same camera.
+    let size = Some(UVec2::new(40, 30));
+    let films: Vec<_> = ["ron", "obj", "gltf"]
+        .iter()
+        .zip(1u64..)
+        .map(|(ext, seed)| {
+            let scene = load(&cornell(ext), size, Some(AUTO_CAMERA)).unwrap();
+            assert_eq!(scene.stats.triangles, 32, "{ext}");
+            assert!((scene.total_power() - 9.806).abs() < 1e-2, "{ext}: {} W", scene.total_power());
+            (ext, render_with(&scene, LightSamplerKind::Tree, 64, 8, seed))
+        })
+        .collect();
+    for (a, b) in [(0, 1), (0, 2), (1, 2)] {
+        compare_films(&films[a].1, &films[b].1, 1e-3, &format!("{} vs {}", films[a].0, films[b].0));
+    }
+    // Without a camera and without `auto`, the error says how to get one.
+    let err = load(&cornell("obj"), size, None).err().unwrap().to_string();
+    assert!(err.contains("cornell.obj") && err.contains("--camera auto"), "{err}");
+}
+
+/// The Cornell glTF as JSON, to break in the tests below.
+fn cornell_json() -> Value {
+    serde_json::from_str(&std::fs::read_to_string(cornell("gltf")).unwrap()).unwrap()
+}
+
+/// Writes `doc` as a `.gltf` in `dir` and loads it; the error message.
+fn load_error(dir: &Path, name: &str, bytes: &[u8]) -> String {
+    let path = dir.join(name);
+    std::fs::write(&path, bytes).unwrap();
+    match load(&path, Some(UVec2::new(8, 6)), None) {
+        Ok(_) => panic!("{name} loaded"),
+        Err(e) => e.to_string(),
+    }
+}
+
+fn assert_mentions(message: &str, parts: &[&str]) {
+    for p in parts {
+        assert!(message.contains(p), "'{message}' does not mention '{p}'");
+    }
+}
+
+#[test]
+fn broken_gltf_files_are_clear_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let glb = std::fs::read(blender("panels.glb")).unwrap();
+    let e = load_error(dir.path(), "truncated.glb", &glb[..glb.len() / 2]);
+    assert_mentions(&e, &["truncated.glb"]);
+
+    let text = serde_json::to_string(&cornell_json()).unwrap();
+    let e = load_error(dir.path(), "syntax.gltf", text.replacen(',', "", 3).as_bytes());
+    assert_mentions(&e, &["syntax.gltf", "line"]);
+
+    let e = load_error(dir.path(), "not.glb", b"solid cube\nfacet normal 0 0 1\n");
+    assert_mentions(&e, &["not.glb", "not a glTF"]);
+
+    let mut doc = cornell_json();
+    doc["buffers"][0]["byteLength"] = json!(100_000);
+    let e = load_error(dir.path(), "short.gltf", doc.to_string().as_bytes());
+    assert_mentions(&e, &["short.gltf", "buffer"]);
+
+    let mut doc = cornell_json();
+    doc["bufferViews"][1]["byteLength"] = json!(12);
+    let e = load_error(dir.path(), "view.gltf", doc.to_string().as_bytes());
+    assert_mentions(&e, &["view.gltf", "accessor 1"]);
+
+    let mut doc = cornell_json();
+    doc["meshes"][2]["primitives"][0]["material"] = json!(99);
+    let e = load_error(dir.path(), "index.gltf", doc.to_string().as_bytes());
+    assert_mentions(&e, &["index.gltf", "material"]);
+
+    let mut doc = cornell_json();
+    doc["extensionsUsed"] = json!(["KHR_draco_mesh_compression"]);
+    doc["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
+    doc["meshes"][0]["primitives"][0]["extensions"] =
+        json!({"KHR_draco_mesh_compression": {"bufferView": 0, "attributes": {"POSITION": 0}}});
+    let e = load_error(dir.path(), "draco.gltf", doc.to_string().as_bytes());
+    assert_mentions(&e, &["draco.gltf", "Draco"]);
+}
+
+#[test]
+fn a_missing_texture_is_a_warning_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut doc = cornell_json();
+    doc["images"] = json!([{"uri": "walls.png"}]);
+    doc["textures"] = json!([{"source": 0}]);
+    doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0});
+    let path = dir.path().join("textured.gltf");
+    std::fs::write(&path, doc.to_string()).unwrap();
+    let scene = load(&path, Some(UVec2::new(8, 6)), None).unwrap();
+    assert!(scene.warnings.iter().any(|w| w.contains("walls.png")), "{:?}", scene.warnings);
+}
+
+#[test]
+fn points_and_lines_are_skipped_with_one_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut doc = cornell_json();
+    doc["meshes"][0]["primitives"][0]["mode"] = json!(0);
+    doc["meshes"][1]["primitives"][0]["mode"] = json!(1);
+    let path = dir.path().join("points.gltf");
+    std::fs::write(&path, doc.to_string()).unwrap();
+    let scene = load(&path, Some(UVec2::new(8, 6)), None).unwrap();
+    let skipped: Vec<_> = scene.warnings.iter().filter(|w| w.contains("point and line")).collect();
+    assert_eq!(skipped.len(), 1, "{:?}", scene.warnings);
+}
+
+#[test]
+fn an_obj_with_a_missing_texture_warns_and_names_it() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("t.obj"),
+        "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl m\nf 1/1 2/2 3/3\n",
+    )
+    .unwrap();
+    std::fs::write(dir.path().join("t.mtl"), "newmtl m\nKd 1 1 1\nmap_Kd bricks.jpg\n").unwrap();
+    let scene = load(&dir.path().join("t.obj"), Some(UVec2::new(8, 6)), Some(AUTO_CAMERA)).unwrap();
+    assert!(scene.warnings.iter().any(|w| w.contains("bricks.jpg")), "{:?}", scene.warnings);
+}
+
+#[test]
+fn a_ron_scene_places_a_gltf_file_and_adds_a_light_grid() {
+    let dir = tempfile::tempdir().unwrap();
+    let ron = format!(
+        r#"Scene(
+    camera: Perspective(eye: (0, 1, 4.4), look_at: (0, 1, 0), yfov_deg: 37),
+    objects: [
+        Mesh(path: "{}", transform: (translate: (5, 0, 0))),
+        Mesh(path: "{}"),
+    ],
+    lights: [ Grid(center: (0, 1.98, 0), normal: (0, -1, 0), extent: (1, 1), rows: 4, cols: 4, fill: 0.5,
+                   emission: Power(watts: 10, color: (1, 1, 1))) ],
+)"#,
+        cornell("gltf").display(),
+        blender("instanced_lamps.glb").display()
+    );
+    let path = dir.path().join("mix.ron");
+    std::fs::write(&path, ron).unwrap();
+    let scene = load(&path, Some(UVec2::new(8, 6)), None).unwrap();
+    assert_eq!(scene.stats.triangles, 32 + 4802 + 2 * 16);
+    assert_eq!(light_kinds(&scene), [("quad", 16), ("triangle", 2 + 4800)].into_iter().collect());
+    // The included file's camera is not used: the RON scene's is.
+    assert_eq!(scene.stats.cameras.len(), 1);
+}
