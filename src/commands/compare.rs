@@ -193,6 +193,7 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
         let mut first: Option<Film> = None;
         let (mut mean, mut mean_var) =
             (vec![Rgb::ZERO; reference.pixels.len()], vec![Rgb::ZERO; reference.pixels.len()]);
+        let mut sum_sq = vec![Rgb::ZERO; reference.pixels.len()];
         for seed in 1..=opts.seeds as u64 {
             let settings = RenderSettings { budget: opts.budget, seed, max_depth, aovs: AovSet::default() };
             let pb = progress_bar(opts.progress, kind.name());
@@ -208,6 +209,7 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
             let seconds = r.stats.elapsed.as_secs_f64();
             for i in 0..pixels.len() {
                 mean[i] += pixels[i] / opts.seeds as f32;
+                sum_sq[i] += pixels[i] * pixels[i];
                 mean_var[i] += r.film.variance_of_mean(i) / (opts.seeds * opts.seeds) as f32;
             }
             runs.push(RunResult {
@@ -220,6 +222,15 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
                 convergence,
             });
             first.get_or_insert(r.film);
+        }
+        if opts.seeds > 1 {
+            // The spread across seeds also estimates the variance of the mean, and unlike the
+            // films' own estimate it exists at 1 spp; take the larger of the two.
+            let k = opts.seeds as f32;
+            for i in 0..mean.len() {
+                let across = (sum_sq[i] - k * mean[i] * mean[i]).max(Rgb::ZERO) / (k * (k - 1.0));
+                mean_var[i] = mean_var[i].max(across);
+            }
         }
         let film = first.expect("at least one seed");
         let pixels = film.means();

@@ -62,9 +62,9 @@ pub fn efficiency(rel_mse: f64, seconds: f64) -> f64 {
 pub struct BiasCheck {
     /// Mean difference (image − reference) over pixels and channels.
     pub mean_difference: f64,
-    /// Its z-score.
+    /// Its z-score (NaN when there was no variance to test against).
     pub z: f64,
-    /// Two-sided p-value.
+    /// Two-sided p-value (NaN likewise).
     pub p: f64,
     /// True when p is below the threshold: the sampler (or the reference) looks biased.
     pub flagged: bool,
@@ -82,7 +82,9 @@ pub fn normal_p_value(z: f64) -> f64 {
 /// Tests whether `mean` (an average of renders, per-pixel variance of the mean
 /// `mean_variance`) agrees with `reference` (its own variance, or zeros) at significance
 /// `alpha`: a z-test on a weighted sum of the residuals, each pixel weighted by
-/// 1/(|reference| + 0.05) (channels averaged, worst-case correlated variance).
+/// 1/(|reference| + 0.05) (channels averaged, worst-case correlated variance). Without any
+/// variance (a single 1-spp render and no reference variance) the test cannot be made: `z` and
+/// `p` are NaN and nothing is flagged.
 ///
 /// The weights make the test relative, so the few very noisy bright pixels (directly seen
 /// lamps) do not drown a bias spread over the image, which a plain sum of residuals would
@@ -107,15 +109,14 @@ pub fn bias_check(
         sum_w += w * r;
         var += w * w * sd * sd;
     }
-    let z = if var > 0.0 {
-        sum_w / var.sqrt()
-    } else if sum_w == 0.0 {
-        0.0
-    } else {
-        f64::INFINITY.copysign(sum_w)
-    };
+    let mean_difference = sum_r / mean.len().max(1) as f64;
+    if !(var > 0.0) {
+        // No variance estimate (one sample of each pixel): nothing to test against.
+        return BiasCheck { mean_difference, z: f64::NAN, p: f64::NAN, flagged: false };
+    }
+    let z = sum_w / var.sqrt();
     let p = normal_p_value(z);
-    BiasCheck { mean_difference: sum_r / mean.len().max(1) as f64, z, p, flagged: p < alpha }
+    BiasCheck { mean_difference, z, p, flagged: p < alpha }
 }
 
 #[cfg(test)]
@@ -142,7 +143,11 @@ mod tests {
         assert_eq!(error_metrics(&img, &img).unwrap(), ErrorMetrics { mse: 0.0, rel_mse: 0.0 });
         let zero = vec![Rgb::ZERO; 100];
         let b = bias_check(&img, &zero, &img, &zero, 0.001);
-        assert!(!b.flagged && b.z == 0.0);
+        assert!(!b.flagged && b.mean_difference == 0.0);
+        // Without any variance a difference cannot be judged: not flagged, z unknown.
+        let shifted: Vec<Rgb> = img.iter().map(|x| *x + Rgb::splat(0.1)).collect();
+        let b = bias_check(&shifted, &zero, &img, &zero, 0.001);
+        assert!(!b.flagged && b.z.is_nan() && (b.mean_difference - 0.1).abs() < 1e-6);
         assert!(error_metrics(&img, &img[..50]).is_err());
     }
 

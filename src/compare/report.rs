@@ -107,7 +107,9 @@ pub struct CompareReport {
 
 /// Formats a number with 4 significant digits (scientific below 1e-3).
 pub fn num(x: f64) -> String {
-    if x == 0.0 {
+    if x.is_nan() {
+        "n/a".into()
+    } else if x == 0.0 {
         "0".into()
     } else if x.fract() == 0.0 && x.abs() < 1e9 {
         format!("{x:.0}")

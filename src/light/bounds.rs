@@ -178,12 +178,38 @@ impl BoundsPacket {
     }
 }
 
+/// cos(5e-4): axes closer than the containment slack count as the same axis.
+const COS_SLACK: f32 = 0.999_999_9;
+
 /// Union of two direction cones (axis, cos half-angle); pbrt's `DirectionCone::Union` with
 /// Cycles' 5e-4 containment slack and a whole-sphere fallback for opposite axes (the NaN axis
 /// of Cycles #106528 cannot happen).
 pub fn cone_union(wa: Vec3A, cos_a: f32, wb: Vec3A, cos_b: f32) -> (Vec3A, f32) {
+    // Fast paths without trigonometry (most unions in a tree build over a mesh or a grid):
+    // either cone is the whole sphere, or the axes agree to within the containment slack.
+    if cos_a <= -1.0 {
+        return (wa, -1.0);
+    }
+    if cos_b <= -1.0 {
+        return (wb, -1.0);
+    }
+    let d = wa.dot(wb).clamp(-1.0, 1.0);
+    if d >= COS_SLACK {
+        return if cos_a <= cos_b { (wa, cos_a) } else { (wb, cos_b) };
+    }
+    // Containment without trigonometry: b ⊂ a iff θd + θb ≤ θa, i.e. (with θd + θb ≤ π, which
+    // is d ≥ −cos θb) cos(θd + θb) = d·cos θb − sin θd·sin θb ≥ cos θa. Exact, so the
+    // answers agree with the angle test below, which adds a small slack.
+    let sin_d = safe_sqrt(1.0 - d * d);
+    let (sin_a, sin_b) = (safe_sqrt(1.0 - cos_a * cos_a), safe_sqrt(1.0 - cos_b * cos_b));
+    if d >= -cos_b && d * cos_b - sin_d * sin_b >= cos_a {
+        return (wa, cos_a);
+    }
+    if d >= -cos_a && d * cos_a - sin_d * sin_a >= cos_b {
+        return (wb, cos_b);
+    }
     let (ta, tb) = (safe_acos(cos_a), safe_acos(cos_b));
-    let td = safe_acos(wa.dot(wb));
+    let td = safe_acos(d);
     if (td + tb).min(PI) <= ta + 5e-4 {
         return (wa, cos_a);
     }
@@ -336,6 +362,10 @@ mod tests {
             (Vec3A::Z, 1.0, Vec3A::X, 1.0),
             (Vec3A::Z, 0.9, Vec3A::Z, 0.5),
             (Vec3A::Z, 1.0, -Vec3A::Z, 1.0),
+            (Vec3A::Y, -1.0, Vec3A::X, 0.5),
+            (Vec3A::X, 0.7, Vec3A::Y, -1.0),
+            (Vec3A::X, 0.7, Vec3A::X, 0.9),
+            (Vec3A::X, 0.9, Vec3A::X, 0.7),
             (Vec3A::new(0.3, 0.4, 0.866).normalize(), 0.95, Vec3A::new(-0.5, 0.1, 0.8).normalize(), 0.8),
         ];
         for (wa, ca, wb, cb) in cases {

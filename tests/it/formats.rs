@@ -238,3 +238,19 @@ fn a_ron_scene_places_a_gltf_file_and_adds_a_light_grid() {
     // The included file's camera is not used: the RON scene's is.
     assert_eq!(scene.stats.cameras.len(), 1);
 }
+
+#[test]
+fn a_mirrored_gltf_node_keeps_its_emitters_front_side() {
+    // The lamp is centred on x = 0, so mirroring it in x leaves it in place; it must still
+    // emit downwards (a wrong winding flip would light the ceiling's back instead).
+    let dir = tempfile::tempdir().unwrap();
+    let mut doc = cornell_json();
+    let lamp = doc["nodes"].as_array().unwrap().iter().position(|n| n["name"] == "light").unwrap();
+    doc["nodes"][lamp]["scale"] = json!([-1.0, 1.0, 1.0]);
+    let path = dir.path().join("mirrored.gltf");
+    std::fs::write(&path, doc.to_string()).unwrap();
+    let size = Some(UVec2::new(24, 18));
+    let mirrored = render_with(&load(&path, size, None).unwrap(), LightSamplerKind::Tree, 32, 3, 1);
+    let original = render_with(&load(&cornell("gltf"), size, None).unwrap(), LightSamplerKind::Tree, 32, 3, 2);
+    compare_films(&mirrored, &original, 1e-3, "mirrored lamp");
+}

@@ -54,30 +54,13 @@ pub struct BinNode {
     pub count: u32,
 }
 
-/// Direction-cone measure M_Ω (Conty & Kulla eq. 1).
-fn m_omega(b: &LightBounds) -> f32 {
-    let theta_o = crate::math::safe_acos(b.cos_theta_o);
-    let theta_e = crate::math::safe_acos(b.cos_theta_e);
+/// Direction-cone measure M_Ω (Conty & Kulla eq. 1) of normal-cone half-angle θo and
+/// emission spread θe.
+fn m_omega(theta_o: f32, theta_e: f32) -> f32 {
     let theta_w = (theta_o + theta_e).min(PI);
     let (sin_o, cos_o) = theta_o.sin_cos();
     2.0 * PI * (1.0 - cos_o)
         + FRAC_PI_2 * (2.0 * theta_w * sin_o - (theta_o - 2.0 * theta_w).cos() - 2.0 * theta_o * sin_o + cos_o)
-}
-
-/// SAOH measure of a cluster: power × spatial extent × directional extent.
-fn measure(b: &LightBounds) -> f32 {
-    if b.phi == 0.0 {
-        return 0.0;
-    }
-    let spatial = if b.infinite {
-        1.0
-    } else {
-        let d = b.max - b.min;
-        let area = 2.0 * (d.x * d.y + d.y * d.z + d.z * d.x);
-        // Collinear or coincident lights: Cycles' fallback to the diagonal.
-        if area > 0.0 { area } else { d.length() }
-    };
-    b.phi * spatial * m_omega(b)
 }
 
 const EMPTY: LightBounds = LightBounds {
@@ -91,30 +74,110 @@ const EMPTY: LightBounds = LightBounds {
     infinite: false,
 };
 
+/// What a bucket accumulates: the lights' boxes and power and, instead of a
+/// running cone union (three `acos` and a rotation per light), the box of their cone axes
+/// with the widest θo and θe. [`Acc::theta_o`] turns that into a cone once per candidate
+/// split. The cone only steers the SAOH cost; the nodes' own bounds are exact unions.
 #[derive(Clone, Copy)]
-struct Bins {
-    bounds: [[LightBounds; BUCKETS]; 3],
-    counts: [[u32; BUCKETS]; 3],
+struct Acc {
+    min: Vec3A,
+    max: Vec3A,
+    phi: f32,
+    axis_min: Vec3A,
+    axis_max: Vec3A,
+    cos_theta_o: f32,
+    cos_theta_e: f32,
+    count: u32,
 }
+
+impl Acc {
+    const EMPTY: Acc = Acc {
+        min: Vec3A::splat(f32::MAX),
+        max: Vec3A::splat(f32::MIN),
+        phi: 0.0,
+        axis_min: Vec3A::splat(f32::MAX),
+        axis_max: Vec3A::splat(f32::MIN),
+        cos_theta_o: 1.0,
+        cos_theta_e: 1.0,
+        count: 0,
+    };
+
+    #[inline]
+    fn add(&mut self, b: &LightBounds) {
+        self.min = self.min.min(b.min);
+        self.max = self.max.max(b.max);
+        self.phi += b.phi;
+        self.axis_min = self.axis_min.min(b.w);
+        self.axis_max = self.axis_max.max(b.w);
+        self.cos_theta_o = self.cos_theta_o.min(b.cos_theta_o);
+        self.cos_theta_e = self.cos_theta_e.min(b.cos_theta_e);
+        self.count += 1;
+    }
+
+    fn merge(&self, o: &Acc) -> Acc {
+        Acc {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+            phi: self.phi + o.phi,
+            axis_min: self.axis_min.min(o.axis_min),
+            axis_max: self.axis_max.max(o.axis_max),
+            cos_theta_o: self.cos_theta_o.min(o.cos_theta_o),
+            cos_theta_e: self.cos_theta_e.min(o.cos_theta_e),
+            count: self.count + o.count,
+        }
+    }
+
+    /// Half-angle of a normal cone around everything added: centred on the axis box, it
+    /// reaches the box's farthest corner (the box is convex, so no axis inside it is farther),
+    /// widened by the widest θo; a box spread beyond 90° counts as the whole sphere.
+    fn theta_o(&self) -> f32 {
+        let theta_o = crate::math::safe_acos(self.cos_theta_o);
+        if self.cos_theta_o <= -1.0 || self.axis_min == self.axis_max {
+            return theta_o;
+        }
+        let Some(w) = (0.5 * (self.axis_min + self.axis_max)).try_normalize() else { return PI };
+        let mut cos_box = 1.0f32;
+        for k in 0..8 {
+            let corner =
+                Vec3A::select(glam::BVec3A::new(k & 1 != 0, k & 2 != 0, k & 4 != 0), self.axis_max, self.axis_min);
+            cos_box = cos_box.min(w.dot(corner) / corner.length().max(1e-30));
+        }
+        if cos_box <= 0.0 { PI } else { (crate::math::safe_acos(cos_box) + theta_o).min(PI) }
+    }
+
+    /// SAOH measure: power × spatial extent × directional extent (M_Ω).
+    fn measure(&self, infinite: bool) -> f32 {
+        if self.count == 0 || self.phi == 0.0 {
+            return 0.0;
+        }
+        let spatial = if infinite {
+            1.0
+        } else {
+            let d = self.max - self.min;
+            let area = 2.0 * (d.x * d.y + d.y * d.z + d.z * d.x);
+            // Collinear or coincident lights: Cycles' fallback to the diagonal.
+            if area > 0.0 { area } else { d.length() }
+        };
+        self.phi * spatial * m_omega(self.theta_o(), crate::math::safe_acos(self.cos_theta_e))
+    }
+}
+
+/// One accumulator per bucket per axis.
+#[derive(Clone, Copy)]
+struct Bins([[Acc; BUCKETS]; 3]);
 
 impl Bins {
     fn new() -> Self {
-        Self { bounds: [[EMPTY; BUCKETS]; 3], counts: [[0; BUCKETS]; 3] }
-    }
-
-    fn add(&mut self, item: &Item, lo: Vec3A, scale: Vec3A) {
-        for a in 0..3 {
-            let b = bucket(item.centroid[a], lo[a], scale[a]);
-            self.bounds[a][b] = self.bounds[a][b].union(&item.bounds);
-            self.counts[a][b] += 1;
-        }
+        Self([[Acc::EMPTY; BUCKETS]; 3])
     }
 
     /// Bins of a slice of items.
     fn of(items: &[Item], lo: Vec3A, scale: Vec3A) -> Self {
         let mut bins = Self::new();
         for it in items {
-            bins.add(it, lo, scale);
+            for a in 0..3 {
+                bins.0[a][bucket(it.centroid[a], lo[a], scale[a])].add(&it.bounds);
+            }
         }
         bins
     }
@@ -122,8 +185,7 @@ impl Bins {
     fn merge(mut self, o: Self) -> Self {
         for a in 0..3 {
             for b in 0..BUCKETS {
-                self.bounds[a][b] = self.bounds[a][b].union(&o.bounds[a][b]);
-                self.counts[a][b] += o.counts[a][b];
+                self.0[a][b] = self.0[a][b].merge(&o.0[a][b]);
             }
         }
         self
@@ -138,12 +200,14 @@ fn bucket(c: f32, lo: f32, scale: f32) -> usize {
 /// Partitions `items` and returns the split position in `1..len`.
 fn split(items: &mut [Item], force_median: bool) -> usize {
     let m = items.len();
+    // Centroid box and the node's spatial box (its direction cone is not needed here).
     let (mut clo, mut chi) = (Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN));
-    let mut node = EMPTY;
+    let (mut blo, mut bhi) = (Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN));
     for it in items.iter() {
         clo = clo.min(it.centroid);
         chi = chi.max(it.centroid);
-        node = node.union(&it.bounds);
+        blo = blo.min(it.bounds.min);
+        bhi = bhi.max(it.bounds.max);
     }
     let ext = chi - clo;
     let median = |items: &mut [Item]| {
@@ -160,29 +224,27 @@ fn split(items: &mut [Item], force_median: bool) -> usize {
     } else {
         Bins::of(items, clo, scale)
     };
-    let node_ext = if node.infinite { ext } else { node.max - node.min };
+    let infinite = items[0].bounds.infinite;
+    let node_ext = if infinite { ext } else { bhi - blo };
     let (mut best, mut best_cost) = (None, f32::INFINITY);
     for a in 0..3 {
         if ext[a] <= 0.0 {
             continue;
         }
         let kr = node_ext.max_element() / node_ext[a].max(1e-30);
-        let (bounds, counts) = (&bins.bounds[a], &bins.counts[a]);
-        // suffix[i] = union of buckets i.. ; the prefix is swept alongside.
-        let mut suffix = [EMPTY; BUCKETS + 1];
-        let mut suffix_n = [0u32; BUCKETS + 1];
+        let buckets = &bins.0[a];
+        // suffix[i] = buckets i.. together; the prefix is swept alongside.
+        let mut suffix = [Acc::EMPTY; BUCKETS + 1];
         for i in (0..BUCKETS).rev() {
-            suffix[i] = suffix[i + 1].union(&bounds[i]);
-            suffix_n[i] = suffix_n[i + 1] + counts[i];
+            suffix[i] = suffix[i + 1].merge(&buckets[i]);
         }
-        let (mut prefix, mut prefix_n) = (EMPTY, 0u32);
+        let mut prefix = Acc::EMPTY;
         for i in 0..BUCKETS - 1 {
-            prefix = prefix.union(&bounds[i]);
-            prefix_n += counts[i];
-            if prefix_n == 0 || suffix_n[i + 1] == 0 {
+            prefix = prefix.merge(&buckets[i]);
+            if prefix.count == 0 || suffix[i + 1].count == 0 {
                 continue;
             }
-            let cost = kr * (measure(&prefix) + measure(&suffix[i + 1]));
+            let cost = kr * (prefix.measure(infinite) + suffix[i + 1].measure(infinite));
             if cost < best_cost {
                 best_cost = cost;
                 best = Some((a, i));
