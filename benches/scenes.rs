@@ -5,7 +5,11 @@
 //!   objects), and one with a 10⁶-triangle emissive mesh;
 //! - `bvh_build`: the BVH over 10⁵ and 10⁶ triangles;
 //! - `trace`: closest-hit and occlusion queries of incoherent rays (random origins above a
-//!   bumpy surface, cosine-distributed directions), 10⁵ and 10⁶ triangles.
+//!   bumpy surface, directions uniform over the sphere), 10⁵ and 10⁶ triangles;
+//! - `trace_cornell`: incoherent secondary rays inside `cornell-9x9.ron` (random origins in
+//!   the box, directions uniform over the sphere) through myriad's `Scene::intersect` /
+//!   `occluded` and, on the same triangles and rays, through obvhs alone (its CWBVH and
+//!   triangle test, as its examples use them): the gap is myriad's own overhead.
 //!
 //! The generated files stay in `target/bench-scenes/` for use with `myriad info` and
 //! `myriad render`.
@@ -198,5 +202,60 @@ fn trace(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, gltf_load, bvh_build, trace);
+fn trace_cornell(c: &mut Criterion) {
+    const RAYS: usize = 100_000;
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-9x9.ron");
+    let scene = load(&path);
+    let rays: Vec<Ray> = (0..RAYS)
+        .map(|i| {
+            let s = SampleStream::new(13, i as u64, 0);
+            let (p, d) = (s.get_2d(0, Dim::PixelJitter, 0), s.get_2d(0, Dim::BsdfDirection, 0));
+            let origin = Vec3A::new(p.x * 1.8 - 0.9, 0.05 + 1.9 * s.get_1d(0, Dim::LightSelect, 0), p.y * 1.8 - 0.9);
+            let (z, phi) = (1.0 - 2.0 * d.x, std::f32::consts::TAU * d.y);
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            Ray::new(origin, Vec3A::new(r * phi.cos(), z, r * phi.sin()))
+        })
+        .collect();
+    let tris: Vec<obvhs::triangle::Triangle> = scene
+        .geometry
+        .world_triangles()
+        .map(|(v, _)| obvhs::triangle::Triangle { v0: v[0], v1: v[1], v2: v[2] })
+        .collect();
+    let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(
+        &tris,
+        obvhs::BvhBuildParams::medium_build(),
+        &mut std::time::Duration::default(),
+    );
+    let ordered: Vec<_> = bvh.primitive_indices.iter().map(|&i| tris[i as usize]).collect();
+    let mut group = c.benchmark_group("trace_cornell");
+    group.throughput(Throughput::Elements(RAYS as u64));
+    group.bench_function("myriad closest", |b| {
+        b.iter(|| rays.iter().filter(|r| scene.intersect(r, f32::INFINITY).is_some()).count())
+    });
+    group.bench_function("obvhs closest", |b| {
+        b.iter(|| {
+            rays.iter()
+                .filter(|r| {
+                    let ray = obvhs::ray::Ray::new(r.origin, r.dir, 0.0, f32::INFINITY);
+                    let mut hit = obvhs::ray::RayHit::none();
+                    bvh.ray_traverse(ray, &mut hit, |ray, id| ordered[id].intersect(ray))
+                })
+                .count()
+        })
+    });
+    group.bench_function("myriad occluded", |b| b.iter(|| rays.iter().filter(|r| scene.occluded(r, 1.0)).count()));
+    group.bench_function("obvhs occluded", |b| {
+        b.iter(|| {
+            rays.iter()
+                .filter(|r| {
+                    let ray = obvhs::ray::Ray::new(r.origin, r.dir, 0.0, 1.0);
+                    !bvh.ray_traverse_miss(ray, |ray, id| ordered[id].intersect(ray))
+                })
+                .count()
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, gltf_load, bvh_build, trace, trace_cornell);
 criterion_main!(benches);
