@@ -67,12 +67,33 @@ fn round_snorm(x: f32) -> i16 {
     (x.clamp(-1.0, 1.0) * SNORM).round() as i16
 }
 
+/// Four u16 lanes as floats (one load, a zero-extending unpack and a convert with SSE2).
+#[inline(always)]
 fn lanes_u16(q: &[u16; WIDTH]) -> Vec4 {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: SSE2 is part of the x86_64 baseline; the load reads exactly the 8 bytes of `q`.
+    unsafe {
+        use std::arch::x86_64::{__m128i, _mm_cvtepi32_ps, _mm_loadl_epi64, _mm_setzero_si128, _mm_unpacklo_epi16};
+        let v = _mm_loadl_epi64(q.as_ptr().cast::<__m128i>());
+        Vec4::from(_mm_cvtepi32_ps(_mm_unpacklo_epi16(v, _mm_setzero_si128())))
+    }
+    #[cfg(not(target_arch = "x86_64"))]
     Vec4::new(q[0] as f32, q[1] as f32, q[2] as f32, q[3] as f32)
 }
 
+/// Four signed-normalised i16 lanes as floats in [−1, 1] (sign-extending unpack with SSE2).
+#[inline(always)]
 fn lanes_i16(q: &[i16; WIDTH]) -> Vec4 {
-    Vec4::new(q[0] as f32, q[1] as f32, q[2] as f32, q[3] as f32) * (1.0 / SNORM)
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: as in `lanes_u16`.
+    let v = unsafe {
+        use std::arch::x86_64::{__m128i, _mm_cvtepi32_ps, _mm_loadl_epi64, _mm_srai_epi32, _mm_unpacklo_epi16};
+        let v = _mm_loadl_epi64(q.as_ptr().cast::<__m128i>());
+        Vec4::from(_mm_cvtepi32_ps(_mm_srai_epi32::<16>(_mm_unpacklo_epi16(v, v))))
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let v = Vec4::new(q[0] as f32, q[1] as f32, q[2] as f32, q[3] as f32);
+    v * (1.0 / SNORM)
 }
 
 impl Node {
