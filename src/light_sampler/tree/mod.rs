@@ -18,14 +18,18 @@
 //! happen only where no light can contribute; the pmf then sums to 0 as well.
 
 mod build;
+mod collapse;
 mod compact;
 
 use std::time::{Duration, Instant};
 
+use rayon::prelude::*;
+
 use self::build::{BinNode, Child, Item};
+use self::collapse::{Collapse, Collapsed};
 use self::compact::{Node, Quantizer};
 use super::{LightSampler, SampledLight, ShadingContext};
-use crate::light::{Light, LightBounds, LightId};
+use crate::light::{Light, LightId};
 use crate::math::Vec3A;
 
 /// Children per node.
@@ -83,128 +87,21 @@ fn importances(node: &Node, grid: &Quantizer, ctx: &ShadingContext) -> ([f64; WI
     (imp, imp.iter().sum())
 }
 
-/// What a node costs, in light-levels, in the collapse's objective: 16 keeps trees below 60
-/// bytes per light (`street.ron` 57, `instanced_lamps.glb` 55, where 0 gives 60 and 66) for
-/// at most one more level of depth.
-const NODE_COST: u64 = 16;
-
-/// Turns the binary tree into 4-wide nodes, choosing for each node which binary
-/// descendants become its (up to four) children so that Σ over lights of their depth (the
-/// expected number of nodes a sample visits, if lights were picked uniformly) plus
-/// [`NODE_COST`] per node is smallest: a dynamic program over the cuts of the top three
-/// binary levels, memoised per binary node. Minimising the node count alone leaves SAOH's
-/// unbalanced subtrees deep (13 levels for the 10⁴ windows of `street.ron` against 10).
-/// Every level of 4-wide nodes consumes at least one binary level, so the binary depth limit
-/// (32) bounds the trails.
-struct Collapser<'a> {
-    bin: &'a [BinNode],
-    items: &'a [Item],
-    grid: Quantizer,
-    /// Smallest objective (light depths + node costs) below each binary node, counted from a
-    /// 4-wide node made for it (0 = not computed yet).
-    cost: Vec<u64>,
-    nodes: Vec<Node>,
-    trails: Vec<u64>,
-    depth: u32,
-}
-
-impl Collapser<'_> {
-    fn bounds_of(&self, c: Child) -> &LightBounds {
-        match c {
-            Child::Item(i) => &self.items[i as usize].bounds,
-            Child::Node(n) => &self.bin[n as usize].bounds,
-        }
-    }
-
-    /// Smallest objective below binary node `n`, when `n` becomes a 4-wide node (each of its
-    /// lights is one level deeper for it, and the node costs [`NODE_COST`]).
-    fn cost(&mut self, n: u32) -> u64 {
-        if self.cost[n as usize] == 0 {
-            let [a, b] = self.bin[n as usize].children;
-            let best = (1..WIDTH).map(|j| self.slot_cost(a, j) + self.slot_cost(b, WIDTH - j)).min().unwrap();
-            self.cost[n as usize] = self.bin[n as usize].count as u64 + NODE_COST + best;
-        }
-        self.cost[n as usize]
-    }
-
-    /// Smallest objective below the current node when entry `c` may occupy up to `k` of its
-    /// slots.
-    fn slot_cost(&mut self, c: Child, k: usize) -> u64 {
-        match c {
-            Child::Item(_) => 0,
-            Child::Node(n) => {
-                let own = self.cost(n);
-                if k == 1 {
-                    return own;
-                }
-                let [a, b] = self.bin[n as usize].children;
-                let split = (1..k).map(|j| self.slot_cost(a, j) + self.slot_cost(b, k - j)).min().unwrap();
-                own.min(split)
-            }
-        }
-    }
-
-    /// Appends to `out` the entries that realise `slot_cost(c, k)`.
-    fn slot_entries(&mut self, c: Child, k: usize, out: &mut Vec<Child>) {
-        if let Child::Node(n) = c
-            && k > 1
-        {
-            let [a, b] = self.bin[n as usize].children;
-            let (j, split) =
-                (1..k).map(|j| (j, self.slot_cost(a, j) + self.slot_cost(b, k - j))).min_by_key(|x| x.1).unwrap();
-            // Ties expand: fewer, fuller nodes.
-            if split <= self.cost(n) {
-                self.slot_entries(a, j, out);
-                self.slot_entries(b, k - j, out);
-                return;
-            }
-        }
-        out.push(c);
-    }
-
-    /// Emits the 4-wide node for binary children `[a, b]` (depth-first); returns its index.
-    fn emit(&mut self, a: Child, b: Child, trail: u64, depth: u32) -> u32 {
-        assert!(depth < MAX_DEPTH, "light tree deeper than its 64-bit trails");
-        self.depth = self.depth.max(depth + 1);
-        let j = (1..WIDTH).min_by_key(|&j| self.slot_cost(a, j) + self.slot_cost(b, WIDTH - j)).unwrap();
-        let mut entries = Vec::with_capacity(WIDTH);
-        self.slot_entries(a, j, &mut entries);
-        self.slot_entries(b, WIDTH - j, &mut entries);
-        let index = self.nodes.len();
-        self.nodes.push(Node::empty());
-        for (k, &c) in entries.iter().enumerate() {
-            let child_trail = trail | ((k as u64) << (2 * depth));
-            let reference = match c {
-                Child::Item(i) => {
-                    let light = self.items[i as usize].light;
-                    self.trails[light as usize] = child_trail;
-                    LEAF | light
-                }
-                Child::Node(n) => {
-                    let [x, y] = self.bin[n as usize].children;
-                    self.emit(x, y, child_trail, depth + 1)
-                }
-            };
-            let bounds = *self.bounds_of(c);
-            self.nodes[index].set(k, reference, &bounds, &self.grid);
-        }
-        index as u32
-    }
-}
-
 impl LightTree {
     /// Builds the tree over `lights` (non-empty) in the current rayon pool.
     pub fn new(lights: &[Light]) -> Self {
         assert!(!lights.is_empty() && lights.len() < (LEAF - 1) as usize, "1 to 2^31 − 2 lights");
         let start = Instant::now();
-        let (mut finite, mut infinite): (Vec<Item>, Vec<Item>) = (Vec::new(), Vec::new());
-        for (i, l) in lights.iter().enumerate() {
-            let bounds = l.bounds();
-            // Directional lights are binned by direction; their box is meaningless.
-            let (list, centroid) =
-                if bounds.infinite { (&mut infinite, bounds.w) } else { (&mut finite, bounds.centroid()) };
-            list.push(Item { bounds, centroid, light: i as u32 });
-        }
+        // Directional lights are binned by direction; their box is meaningless.
+        let (infinite, finite): (Vec<Item>, Vec<Item>) = lights
+            .par_iter()
+            .enumerate()
+            .map(|(i, l)| {
+                let bounds = l.bounds();
+                let centroid = if bounds.infinite { bounds.w } else { bounds.centroid() };
+                Item { bounds, centroid, light: i as u32 }
+            })
+            .partition(|it| it.bounds.infinite);
         let (mut lo, mut hi) = (Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN));
         for it in &finite {
             lo = lo.min(it.bounds.min);
@@ -231,33 +128,7 @@ impl LightTree {
             items.extend(part);
             roots.push(shift(root));
         }
-        let mut c = Collapser {
-            bin: &bin,
-            items: &items,
-            grid,
-            cost: vec![0; bin.len()],
-            nodes: Vec::new(),
-            trails: vec![0; lights.len()],
-            depth: 0,
-        };
-        match roots[..] {
-            [Child::Node(r)] => {
-                let [a, b] = bin[r as usize].children;
-                c.emit(a, b, 0, 0);
-            }
-            [a, b] => {
-                c.emit(a, b, 0, 0);
-            }
-            [Child::Item(i)] => {
-                // One light: a root with a single child.
-                let mut root = Node::empty();
-                root.set(0, LEAF | items[i as usize].light, &items[i as usize].bounds, &grid);
-                c.nodes.push(root);
-                c.depth = 1;
-            }
-            _ => unreachable!("one or two parts"),
-        }
-        let (mut nodes, trails, depth) = (c.nodes, c.trails, c.depth);
+        let Collapsed { mut nodes, trails, depth } = Collapse::run(&bin, &items, grid, &roots, lights.len());
         nodes.shrink_to_fit();
         let memory_bytes = nodes.capacity() * std::mem::size_of::<Node>() + trails.capacity() * 8;
         let stats = TreeStats { build_time: start.elapsed(), nodes: nodes.len(), depth, memory_bytes };
@@ -369,6 +240,27 @@ mod tests {
         }
         let total: f64 = (0..lights.len()).map(|i| tree.pmf(&ctx, LightId(i as u32)) as f64).sum();
         assert!((total - 1.0).abs() < 1e-5, "{total}");
+    }
+
+    #[test]
+    fn the_tree_does_not_depend_on_the_thread_count() {
+        // Large enough that the build, the collapse and the emission all run in parallel.
+        let lights = grid(60_000);
+        let build = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| LightTree::new(&lights))
+        };
+        let (one, three) = (build(1), build(3));
+        assert_eq!(one.trails, three.trails);
+        assert_eq!((one.stats.nodes, one.stats.depth), (three.stats.nodes, three.stats.depth));
+        for (a, b) in one.nodes.iter().zip(&three.nodes) {
+            assert_eq!(a.children, b.children);
+        }
+        let ctx = ShadingContext { p: Vec3A::new(1.0, 0.0, 1.0), n: Vec3A::Y };
+        for k in 0..100 {
+            let u = (k as f32 + 0.5) / 100.0;
+            assert_eq!(one.sample(&ctx, u), three.sample(&ctx, u));
+        }
     }
 
     #[test]
