@@ -383,6 +383,7 @@ pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
     stats.stored_triangles = geometry.stored_triangle_count();
     stats.bvh_build_time = accel.build_time;
     stats.geometry_bytes = geometry.memory_bytes();
+    lights.shrink_to_fit();
     stats.light_bytes = lights.capacity() * std::mem::size_of::<Light>();
     stats.build_time = start.elapsed();
     Ok(Scene {
