@@ -84,7 +84,7 @@ pub fn estimate_direct(
             let u_select = stream.get_1d(bounce, Dim::LightSelect, 0);
             let u_point = stream.get_2d(bounce, Dim::LightPoint, 0);
             let ctx = ShadingContext { p, n: sp.frame.n };
-            match sampler.sample(&ctx, u_select) {
+            match sampler.sample_prefetching(&ctx, u_select, &scene.lights) {
                 Some(s) => {
                     debug_assert!(s.pmf > 0.0);
                     light_contribution(scene, &scene.lights[s.light.0 as usize], s.pmf, sp, p, wo, u_point, counters)

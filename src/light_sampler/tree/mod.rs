@@ -28,7 +28,7 @@ use rayon::prelude::*;
 use self::build::{BinNode, Child, Item};
 use self::collapse::{Collapse, Collapsed};
 use self::compact::{Node, Quantizer};
-use super::{LightSampler, SampledLight, ShadingContext};
+use super::{LightSampler, SampledLight, ShadingContext, prefetch};
 use crate::light::{Light, LightId};
 use crate::math::Vec3A;
 
@@ -62,22 +62,6 @@ pub struct LightTree {
     trails: Vec<u64>,
     grid: Quantizer,
     stats: TreeStats,
-}
-
-/// Asks the memory system for node `index` (both cache lines) ahead of its use.
-#[inline(always)]
-fn prefetch(nodes: &[Node], index: u32) {
-    #[cfg(target_arch = "x86_64")]
-    if let Some(n) = nodes.get(index as usize) {
-        let p = (n as *const Node).cast::<i8>();
-        // SAFETY: prefetching is a hint with no architectural effect; the address is that of
-        // a live node, and `wrapping_add` stays inside it (128 bytes).
-        unsafe {
-            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-            _mm_prefetch::<_MM_HINT_T0>(p);
-            _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(64));
-        }
-    }
 }
 
 /// Importances of a node's children at `ctx` (0 for empty slots), and their sum.
@@ -141,17 +125,22 @@ impl LightTree {
     }
 }
 
-impl LightSampler for LightTree {
+impl LightTree {
+    /// [`LightSampler::sample`], calling `leaf_hint(light)` for the lights among the
+    /// children of each node visited before choosing: the caller can start fetching the
+    /// light it will shade (at 10⁶ lights, otherwise a certain cache miss per sample).
     #[inline]
-    fn sample(&self, ctx: &ShadingContext, u: f32) -> Option<SampledLight> {
+    pub fn sample_hinting(&self, ctx: &ShadingContext, u: f32, leaf_hint: impl Fn(u32)) -> Option<SampledLight> {
         let (mut u, mut pmf, mut node) = (u as f64, 1.0f64, 0usize);
         for _ in 0..MAX_DEPTH {
             let n = &self.nodes[node];
-            // The chosen child is known only after the importances: fetch all inner children
+            // The chosen child is known only after the importances: fetch all children
             // meanwhile (the lower levels of a 10⁶-light tree miss every cache).
             for &c in &n.children {
                 if c & LEAF == 0 {
-                    prefetch(&self.nodes, c);
+                    prefetch(&self.nodes, c as usize);
+                } else if c != NONE {
+                    leaf_hint(c & !LEAF);
                 }
             }
             let (imp, total) = importances(n, &self.grid, ctx);
@@ -182,6 +171,13 @@ impl LightSampler for LightTree {
         }
         unreachable!("light tree deeper than MAX_DEPTH")
     }
+}
+
+impl LightSampler for LightTree {
+    #[inline]
+    fn sample(&self, ctx: &ShadingContext, u: f32) -> Option<SampledLight> {
+        self.sample_hinting(ctx, u, |_| {})
+    }
 
     #[inline]
     fn pmf(&self, ctx: &ShadingContext, light: LightId) -> f32 {
@@ -191,7 +187,7 @@ impl LightSampler for LightTree {
             let k = (trail & 3) as usize;
             // The path is known: fetch the next node while this one is evaluated.
             if n.children[k] & LEAF == 0 {
-                prefetch(&self.nodes, n.children[k]);
+                prefetch(&self.nodes, n.children[k] as usize);
             }
             let (imp, total) = importances(n, &self.grid, ctx);
             trail >>= 2;
