@@ -23,7 +23,7 @@ use super::{LEAF, MAX_DEPTH, NONE, WIDTH};
 use crate::light::LightBounds;
 
 /// What a node costs, in light-levels, in the collapse's objective: 16 keeps trees below 60
-/// bytes per light (`street.ron` 57, `instanced_lamps.glb` 55, where 0 gives 60 and 66) for
+/// bytes per light (`street.ron` 57, `instanced_lamps.glb` 58) for
 /// at most one more level of depth.
 const NODE_COST: u64 = 16;
 
