@@ -31,7 +31,8 @@ pub fn fmix64(mut k: u64) -> u64 {
 #[derive(Clone, Copy, Debug)]
 pub struct SampleStream {
     key: u64,
-    sample: u32,
+    /// The sample index with its bits reversed, as the Sobol points take it.
+    sample_reversed: u32,
 }
 
 impl SampleStream {
@@ -42,7 +43,7 @@ impl SampleStream {
         let key = fmix64(k ^ pixel.wrapping_mul(0xd1b5_4a32_d192_ed03));
         // Beyond 2^32 samples per pixel the sequence repeats with a fresh scramble.
         let key = fmix64(key ^ (sample >> 32));
-        Self { key, sample: sample as u32 }
+        Self { key, sample_reversed: (sample as u32).reverse_bits() }
     }
 
     /// The scramble seed of one dimension.
@@ -56,13 +57,13 @@ impl SampleStream {
     /// same dimension (the `all` estimator's per-light points).
     #[inline]
     pub fn get_1d(&self, bounce: u32, dim: Dim, sub: u32) -> f32 {
-        sobol::to_unit32(sobol::sample_1d(self.sample, self.seed(bounce, dim as u64, sub)))
+        sobol::to_unit32(sobol::sample_1d(self.sample_reversed, self.seed(bounce, dim as u64, sub)))
     }
 
     /// Two numbers in `[0,1)²` for a 2D `dim`, stratified together.
     #[inline]
     pub fn get_2d(&self, bounce: u32, dim: Dim, sub: u32) -> Vec2 {
-        let (x, y) = sobol::sample_2d(self.sample, self.seed(bounce, dim as u64, sub));
+        let (x, y) = sobol::sample_2d(self.sample_reversed, self.seed(bounce, dim as u64, sub));
         Vec2::new(sobol::to_unit32(x), sobol::to_unit32(y))
     }
 }

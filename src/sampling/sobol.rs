@@ -9,7 +9,8 @@
 //! at any spp is still stratified at the largest power of two below it.
 
 /// Burley's improved Laine-Karras permutation: a hash in which each bit depends only on
-/// itself and lower bits.
+/// itself and lower bits. Applied to bit-reversed values ("reverse, hash, reverse") it is a
+/// nested uniform (Owen) scramble: each bit flipped depending on the higher-order bits.
 #[inline(always)]
 fn laine_karras(mut x: u32, seed: u32) -> u32 {
     x ^= x.wrapping_mul(0x3d20_adea);
@@ -20,15 +21,9 @@ fn laine_karras(mut x: u32, seed: u32) -> u32 {
     x
 }
 
-/// Owen scramble in base 2: each bit flipped depending on the higher-order bits.
-#[inline(always)]
-pub fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
-    laine_karras(x.reverse_bits(), seed).reverse_bits()
-}
-
-/// The second dimension of the Sobol sequence (the first is bit reversal).
-#[inline(always)]
-fn sobol_dim1(mut i: u32) -> u32 {
+/// The second dimension of the Sobol sequence (the first is bit reversal), bit by bit: the
+/// definition, which [`SOBOL_DIM1`] tabulates.
+const fn sobol_dim1_bits(mut i: u32) -> u32 {
     let (mut v, mut y) = (1u32 << 31, 0u32);
     while i != 0 {
         if i & 1 != 0 {
@@ -40,25 +35,53 @@ fn sobol_dim1(mut i: u32) -> u32 {
     y
 }
 
-/// 32-bit fixed point in [0,1) to f32 (top 24 bits: every value exact, never 1).
+/// [`sobol_dim1_bits`] of each byte of the index in each of its four positions, bit-reversed
+/// (the scramble that follows works on reversed bits): the dimension is linear over GF(2), so
+/// four lookups replace a loop of up to 32 unpredictable branches (the shuffled indices use
+/// all 32 bits) and a bit reversal.
+static SOBOL_DIM1_REVERSED: [[u32; 256]; 4] = {
+    let mut t = [[0u32; 256]; 4];
+    let mut k = 0;
+    while k < 4 {
+        let mut b = 0;
+        while b < 256 {
+            t[k][b] = sobol_dim1_bits((b as u32) << (8 * k)).reverse_bits();
+            b += 1;
+        }
+        k += 1;
+    }
+    t
+};
+
+/// `sobol_dim1_bits(i).reverse_bits()`, from [`SOBOL_DIM1_REVERSED`].
+#[inline(always)]
+fn sobol_dim1_reversed(i: u32) -> u32 {
+    let t = &SOBOL_DIM1_REVERSED;
+    let b = i.to_le_bytes();
+    t[0][b[0] as usize] ^ t[1][b[1] as usize] ^ t[2][b[2] as usize] ^ t[3][b[3] as usize]
+}
+
 #[inline(always)]
 pub fn to_unit32(x: u32) -> f32 {
     (x >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
 }
 
-/// Point `index` of a scrambled 1D sequence for `seed`.
+/// Point of a scrambled 1D sequence for `seed`; `index_reversed` is the sample index with
+/// its bits reversed (computed once per sample, see `SampleStream`).
 #[inline]
-pub fn sample_1d(index: u32, seed: u64) -> u32 {
-    let i = nested_uniform_scramble(index, seed as u32);
-    nested_uniform_scramble(i.reverse_bits(), (seed >> 32) as u32)
+pub fn sample_1d(index_reversed: u32, seed: u64) -> u32 {
+    // Shuffle the index (a nested uniform scramble), then Owen-scramble the van der Corput
+    // point of it; each scramble is "reverse, hash, reverse", and adjacent reversals cancel.
+    let i = laine_karras(index_reversed, seed as u32).reverse_bits();
+    laine_karras(i, (seed >> 32) as u32).reverse_bits()
 }
 
-/// Point `index` of a scrambled 2D (0,2)-sequence for `seed`.
+/// Point of a scrambled 2D (0,2)-sequence for `seed`; `index_reversed` as in [`sample_1d`].
 #[inline]
-pub fn sample_2d(index: u32, seed: u64) -> (u32, u32) {
+pub fn sample_2d(index_reversed: u32, seed: u64) -> (u32, u32) {
     let s = super::fmix64(seed);
-    let i = nested_uniform_scramble(index, seed as u32);
-    (nested_uniform_scramble(i.reverse_bits(), s as u32), nested_uniform_scramble(sobol_dim1(i), (s >> 32) as u32))
+    let i = laine_karras(index_reversed, seed as u32).reverse_bits();
+    (laine_karras(i, s as u32).reverse_bits(), laine_karras(sobol_dim1_reversed(i), (s >> 32) as u32).reverse_bits())
 }
 
 #[cfg(test)]
@@ -72,7 +95,7 @@ mod tests {
         for seed in [1u64, 0xdead_beef, 42 << 40] {
             for m in [4u32, 6, 8] {
                 let n = 1u32 << m;
-                let pts: Vec<(u32, u32)> = (0..n).map(|i| sample_2d(i, seed)).collect();
+                let pts: Vec<(u32, u32)> = (0..n).map(|i| sample_2d(i.reverse_bits(), seed)).collect();
                 for a in 0..=m {
                     let mut cells = vec![0u32; n as usize];
                     for &(x, y) in &pts {
@@ -85,7 +108,7 @@ mod tests {
                 // 1D: one point per 1/n stratum.
                 let mut strata = vec![0u32; n as usize];
                 for i in 0..n {
-                    strata[(sample_1d(i, seed) >> (32 - m)) as usize] += 1;
+                    strata[(sample_1d(i.reverse_bits(), seed) >> (32 - m)) as usize] += 1;
                 }
                 assert!(strata.iter().all(|&c| c == 1));
             }
@@ -93,9 +116,17 @@ mod tests {
     }
 
     #[test]
+    fn the_table_is_the_definition() {
+        for k in 0..100_000u32 {
+            let i = k.wrapping_mul(0x9e37_79b9) ^ (k >> 3);
+            assert_eq!(sobol_dim1_reversed(i), sobol_dim1_bits(i).reverse_bits(), "{i:#x}");
+        }
+    }
+
+    #[test]
     fn different_seeds_give_different_points() {
-        let a: Vec<_> = (0..16).map(|i| sample_2d(i, 1)).collect();
-        let b: Vec<_> = (0..16).map(|i| sample_2d(i, 2)).collect();
+        let a: Vec<_> = (0..16u32).map(|i| sample_2d(i.reverse_bits(), 1)).collect();
+        let b: Vec<_> = (0..16u32).map(|i| sample_2d(i.reverse_bits(), 2)).collect();
         assert_ne!(a, b);
     }
 }
