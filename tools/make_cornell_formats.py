@@ -4,7 +4,9 @@
     python3 tools/make_cornell_formats.py tests/data/cornell
 
 writes cornell.ron, cornell.obj + cornell.mtl and cornell.gltf (embedded buffer) into the
-given directory. Every surface is a quad (corner, edge1, edge2); its front face, the side
+given directory, and two variants with UVs: cornell-striped.gltf, whose lamp has an emission
+texture of black and white stripes (half its power), and cornell-cutout.gltf, whose back wall
+is cut out by an alpha mask (a fully transparent base-colour texture, alphaMode MASK). Every surface is a quad (corner, edge1, edge2); its front face, the side
 edge1 x edge2 points to, is the counter-clockwise one in OBJ and glTF, and the emitting side.
 Diffuse surfaces are exactly Lambertian in every format (glTF: metallic 0, roughness 1,
 specularFactor 0; OBJ: Ks 0). Only the Python standard library is used.
@@ -14,6 +16,7 @@ import base64
 import json
 import struct
 import sys
+import zlib
 from pathlib import Path
 
 MATERIALS = {
@@ -108,10 +111,31 @@ def write_obj(path):
     path.write_text("\n".join(obj) + "\n")
 
 
-def write_gltf(path):
-    names = list(MATERIALS)
+def png(width, height, rows):
+    """An 8-bit RGBA PNG of `rows` (lists of (r, g, b, a) tuples), as a data URI."""
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    raw = b"".join(b"\0" + bytes(v for px in row for v in px) for row in rows)
+    data = (
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 6, 0, 0, 0))
+        + chunk(b"IDAT", zlib.compress(raw))
+        + chunk(b"IEND", b"")
+    )
+    return "data:image/png;base64," + base64.b64encode(data).decode()
+
+
+BACK_WALL = 2  # index in QUADS
+
+
+def write_gltf(path, striped=False, cutout=False):
+    textured = striped or cutout
+    names = list(MATERIALS) + (["cutout"] if cutout else [])
     materials = []
-    for name, (albedo, radiance) in MATERIALS.items():
+    for name in names:
+        albedo, radiance = MATERIALS.get(name, MATERIALS["white"])
         m = {
             "name": name,
             "doubleSided": radiance is None,
@@ -122,15 +146,22 @@ def write_gltf(path):
             strength = max(radiance)
             m["emissiveFactor"] = [x / strength for x in radiance]
             m["extensions"]["KHR_materials_emissive_strength"] = {"emissiveStrength": strength}
+            if striped:
+                m["emissiveTexture"] = {"index": 0}
+        if name == "cutout":
+            m["pbrMetallicRoughness"]["baseColorTexture"] = {"index": 1}
+            m["alphaMode"] = "MASK"
         materials.append(m)
     # One mesh per material, two triangles per quad, non-indexed positions.
     blob, views, accessors, meshes = b"", [], [], []
     for mi, name in enumerate(names):
-        pts = []
-        for q in QUADS:
-            if q[3] == name:
+        pts, uvs = [], []
+        for qi, q in enumerate(QUADS):
+            material = "cutout" if cutout and qi == BACK_WALL else q[3]
+            if material == name:
                 a, b, c, d = corners(q)
                 pts += [a, b, c, a, c, d]
+                uvs += [(0, 0), (1, 0), (1, 1), (0, 0), (1, 1), (0, 1)]
         data = b"".join(struct.pack("<3f", *p) for p in pts)
         views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(data), "target": 34962})
         lo = [min(p[k] for p in pts) for k in range(3)]
@@ -138,8 +169,15 @@ def write_gltf(path):
         accessors.append(
             {"bufferView": len(views) - 1, "componentType": 5126, "count": len(pts), "type": "VEC3", "min": lo, "max": hi}
         )
-        meshes.append({"name": name, "primitives": [{"attributes": {"POSITION": len(accessors) - 1}, "material": mi}]})
+        attributes = {"POSITION": len(accessors) - 1}
         blob += data
+        if textured:
+            data = b"".join(struct.pack("<2f", *uv) for uv in uvs)
+            views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(data), "target": 34962})
+            accessors.append({"bufferView": len(views) - 1, "componentType": 5126, "count": len(uvs), "type": "VEC2"})
+            attributes["TEXCOORD_0"] = len(accessors) - 1
+            blob += data
+        meshes.append({"name": name, "primitives": [{"attributes": attributes, "material": mi}]})
     nodes = [{"name": n, "mesh": i} for i, n in enumerate(names)]
     # Camera node: at the eye, looking down -Z towards the target (the target is straight ahead).
     nodes.append({"name": "Camera", "camera": 0, "translation": list(CAMERA["eye"])})
@@ -163,6 +201,11 @@ def write_gltf(path):
             {"byteLength": len(blob), "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode()}
         ],
     }
+    if textured:
+        white, black, clear = (255, 255, 255, 255), (0, 0, 0, 255), (255, 255, 255, 0)
+        doc["images"] = [{"uri": png(2, 2, [[white, black], [white, black]])}, {"uri": png(1, 1, [[clear]])}]
+        doc["samplers"] = [{"magFilter": 9728, "minFilter": 9728}]
+        doc["textures"] = [{"source": 0, "sampler": 0}, {"source": 1, "sampler": 0}]
     path.write_text(json.dumps(doc, indent=1) + "\n")
 
 
@@ -172,6 +215,8 @@ def main():
     write_ron(out / "cornell.ron")
     write_obj(out / "cornell.obj")
     write_gltf(out / "cornell.gltf")
+    write_gltf(out / "cornell-striped.gltf", striped=True)
+    write_gltf(out / "cornell-cutout.gltf", cutout=True)
 
 
 if __name__ == "__main__":

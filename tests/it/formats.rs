@@ -254,3 +254,50 @@ fn a_mirrored_gltf_node_keeps_its_emitters_front_side() {
     let original = render_with(&load(&cornell("gltf"), size, None).unwrap(), LightSamplerKind::Tree, 32, 3, 2);
     compare_films(&mirrored, &original, 1e-3, "mirrored lamp");
 }
+
+/// Image mean (all channels) and its standard error, from the film's per-pixel variances.
+fn image_mean(film: &myriad::film::Film) -> (f64, f64) {
+    let n = (film.size().x * film.size().y) as usize;
+    let (mut sum, mut var) = (0.0f64, 0.0f64);
+    for i in 0..n {
+        let (m, v) = (film.mean(i), film.variance_of_mean(i));
+        sum += (m.x + m.y + m.z) as f64 / 3.0;
+        // Channels of one path are correlated: the worst case adds their deviations.
+        var += ((v.x.sqrt() + v.y.sqrt() + v.z.sqrt()) as f64 / 3.0).powi(2);
+    }
+    (sum / n as f64, var.sqrt() / n as f64)
+}
+
+#[test]
+fn a_striped_emission_texture_emits_its_mean_and_renders_unbiased() {
+    // The lamp's texture is half black, half white (nearest filtering): its power is half the
+    // untextured lamp's, and the image has the mean of a lamp of half the radiance. NEE picks
+    // points on the lamp by its mean while BSDF rays see the stripes: MIS must agree.
+    let size = Some(UVec2::new(32, 24));
+    let striped = load(&cornell("gltf").with_file_name("cornell-striped.gltf"), size, None).unwrap();
+    assert!((striped.total_power() - 0.5 * 9.806).abs() < 0.01, "{} W", striped.total_power());
+    let dir = tempfile::tempdir().unwrap();
+    let mut doc = cornell_json();
+    let lamp = doc["materials"].as_array().unwrap().iter().position(|m| m["name"] == "light").unwrap();
+    doc["materials"][lamp]["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"] = json!(8.5);
+    let path = dir.path().join("half.gltf");
+    std::fs::write(&path, doc.to_string()).unwrap();
+    let half = load(&path, size, None).unwrap();
+    let (a, sa) = image_mean(&render_with(&striped, LightSamplerKind::Tree, 256, 4, 1));
+    let (b, sb) = image_mean(&render_with(&half, LightSamplerKind::Tree, 256, 4, 2));
+    let z = (a - b) / (sa * sa + sb * sb).sqrt();
+    assert!(z.abs() < 4.0, "striped lamp {a} vs half-radiance lamp {b} (z = {z})");
+}
+
+#[test]
+fn an_alpha_mask_cuts_the_surface_out() {
+    // A fully transparent base-colour texture in MASK mode: rays pass through the back wall.
+    let ray = myriad::geometry::Ray::new(myriad::math::Vec3A::new(0.0, 1.5, 0.0), -myriad::math::Vec3A::Z);
+    let size = Some(UVec2::new(8, 6));
+    let plain = load(&cornell("gltf"), size, None).unwrap();
+    let hit = plain.intersect(&ray, f32::INFINITY).expect("the back wall");
+    assert!((hit.t - 1.0).abs() < 1e-4, "{}", hit.t);
+    let cut = load(&cornell("gltf").with_file_name("cornell-cutout.gltf"), size, None).unwrap();
+    assert!(cut.intersect(&ray, f32::INFINITY).is_none());
+    assert!(!cut.occluded(&ray, 10.0));
+}
