@@ -67,7 +67,7 @@ pub enum LightSamplerKind {
 }
 
 impl LightSamplerKind {
-    /// Every sampler, cheapest selection first (after `all`).
+    /// Every sampler, in the order the command line lists them.
     pub const ALL: [LightSamplerKind; 5] = [
         LightSamplerKind::All,
         LightSamplerKind::Uniform,

@@ -169,6 +169,11 @@ impl<'a> Collapse<'a> {
         let index = out.len();
         out.push(Node::empty());
         let child_trail = |k: usize| trail | ((k as u64) << (2 * depth));
+        // The subtree under inner entry k, appended to `out`; its depth.
+        let subtree = |k: usize, n: u32, out: &mut Vec<Node>| {
+            let [x, y] = self.bin[n as usize].children;
+            self.emit(x, y, child_trail(k), depth + 1, out)
+        };
         let mut references = [NONE; WIDTH];
         let mut below = 0;
         if entries.iter().any(|&c| self.lights_below(c) > PARALLEL) {
@@ -179,9 +184,8 @@ impl<'a> Collapse<'a> {
                 .enumerate()
                 .map(|(k, &c)| match c {
                     Child::Node(n) => {
-                        let [x, y] = self.bin[n as usize].children;
                         let mut sub = Vec::new();
-                        let d = self.emit(x, y, child_trail(k), depth + 1, &mut sub);
+                        let d = subtree(k, n, &mut sub);
                         Some((sub, d))
                     }
                     Child::Item(_) => None,
@@ -202,9 +206,8 @@ impl<'a> Collapse<'a> {
                 references[k] = match c {
                     Child::Item(i) => self.leaf(i, child_trail(k)),
                     Child::Node(n) => {
-                        let [x, y] = self.bin[n as usize].children;
                         let root = out.len() as u32;
-                        below = below.max(self.emit(x, y, child_trail(k), depth + 1, out));
+                        below = below.max(subtree(k, n, out));
                         root
                     }
                 };
