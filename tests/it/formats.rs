@@ -12,8 +12,9 @@ use serde_json::{Value, json};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+/// A Blender export in `tests/data/blender/` (its README says what each holds).
 fn blender(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/blender").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/blender").join(name)
 }
 
 fn cornell(ext: &str) -> PathBuf {
@@ -40,7 +41,7 @@ fn light_kinds(scene: &Scene) -> BTreeMap<&'static str, usize> {
 type LightCounts = &'static [(&'static str, usize)];
 
 /// (file, meshes, mesh nodes, triangles, emissive triangles, lights by kind), from the
-/// README of `../shared/assets/blender/`.
+/// README of `tests/data/blender/`.
 const BLENDER_FILES: [(&str, usize, usize, usize, usize, LightCounts); 4] = [
     ("cornell_grid_7.glb", 56, 56, 132, 98, &[("triangle", 98)]),
     ("panels.glb", 7, 7, 24, 8, &[("triangle", 8)]),
@@ -69,20 +70,40 @@ fn blender_exports_load_with_the_counts_of_their_readme() {
     assert_eq!(inst.stats.stored_triangles, 4802);
 }
 
-/// The image means of Cycles's renders of these files (their README), and how close ours must
-/// come. Cycles's own noise at 1024 spp is about 0.3 % on the mean. `punctual` differs in the
-/// spot's penumbra: myriad follows the KHR_lights_punctual falloff, Cycles its smoothstep blend.
-const CYCLES_MEANS: [(&str, [f32; 3], f32); 4] = [
-    ("cornell_grid_7.glb", [0.6508, 0.6258, 0.5628], 0.02),
-    ("panels.glb", [0.2505, 0.2435, 0.2309], 0.02),
-    ("punctual.glb", [0.2676, 0.2341, 0.2006], 0.05),
-    ("instanced_lamps.glb", [1.1359, 0.8519, 0.4543], 0.02),
-];
+/// How close our image means must come to Cycles's renders of these files
+/// (`tests/data/blender/refs/`), whose own noise at 1024 spp is about 0.3 % on the mean.
+/// `punctual` differs in the spot's penumbra: myriad follows the KHR_lights_punctual falloff,
+/// Cycles its smoothstep blend.
+const CYCLES_TOLERANCE: [(&str, f32); 4] =
+    [("cornell_grid_7", 0.02), ("panels", 0.02), ("punctual", 0.05), ("instanced_lamps", 0.02)];
+
+/// The mean of each channel of Cycles's reference render of `name`.
+fn cycles_mean(name: &str) -> [f32; 3] {
+    let path = blender(&format!("refs/{name}.cycles.exr"));
+    let (layers, _) = myriad::io::exr::read(&path).unwrap_or_else(|e| panic!("{e}"));
+    ["R", "G", "B"].map(|c| {
+        let data = &layers.channel(c).unwrap_or_else(|| panic!("{}: no {c} channel", path.display())).data;
+        (data.iter().map(|&x| x as f64).sum::<f64>() / data.len() as f64) as f32
+    })
+}
+
+#[test]
+fn the_cycles_references_are_the_renders_their_readme_describes() {
+    // The means the README lists, so that a replaced reference cannot go unnoticed.
+    let listed = [("cornell_grid_7", [0.6508, 0.6258, 0.5628]), ("instanced_lamps", [1.1359, 0.8519, 0.4543])];
+    for (name, mean) in listed {
+        let got = cycles_mean(name);
+        for c in 0..3 {
+            assert!((got[c] - mean[c]).abs() < 1e-4, "{name}: channel {c} mean {} vs {}", got[c], mean[c]);
+        }
+    }
+}
 
 #[test]
 fn blender_exports_render_what_cycles_renders() {
-    for (file, cycles, tolerance) in CYCLES_MEANS {
-        let scene = load(&blender(file), Some(UVec2::new(64, 48)), None).unwrap();
+    for (name, tolerance) in CYCLES_TOLERANCE {
+        let (file, cycles) = (format!("{name}.glb"), cycles_mean(name));
+        let scene = load(&blender(&file), Some(UVec2::new(64, 48)), None).unwrap();
         let film = render_with(&scene, LightSamplerKind::Tree, 64, 8, 1);
         let means = film.means();
         let mean = means.iter().fold(myriad::math::Rgb::ZERO, |a, &b| a + b) / means.len() as f32;
