@@ -1,6 +1,6 @@
 //! Next-event estimation: light arriving directly at a shading point from the light sources.
 //!
-//! With a one-light sampler, one light is drawn with the single number `Dim::LightSelect`
+//! With a one-light sampler, one light is drawn with the single 64-bit number `Dim::LightSelect`
 //! and one point on it with `Dim::LightPoint`; the contribution is divided by the product
 //! pmf × pdf and MIS-weighted (power heuristic) against the BSDF's density for the same
 //! direction. With `all`, every light gets its own point (`Dim::LightPoint`, sub-index = light)
@@ -81,7 +81,7 @@ pub fn estimate_direct(
             })
             .fold(Rgb::ZERO, |a, b| a + b),
         LightStrategy::One(sampler) => {
-            let u_select = stream.get_1d(bounce, Dim::LightSelect, 0);
+            let u_select = stream.get_1d_u64(bounce, Dim::LightSelect, 0);
             let u_point = stream.get_2d(bounce, Dim::LightPoint, 0);
             let ctx = ShadingContext { p, n: sp.frame.n };
             match sampler.sample_prefetching(&ctx, u_select, &scene.lights) {

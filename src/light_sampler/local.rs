@@ -4,8 +4,8 @@
 //! O(n) per shading point, and again for the pmf MIS needs at an emitter hit: the ideal the
 //! light tree approximates in O(log n). Importances are evaluated four lights at a time
 //! (`BoundsPacket`, SSE) into a per-thread scratch table (allocated once per thread), and the
-//! light is found by inverting the cumulative sum in f64. Inversion keeps the mapping from
-//! `u` to lights monotone, so stratified `u` stay stratified over the lights (pbrt's
+//! light is the one whose cell ([`Split`]) holds `u`. Cells in slot order keep the mapping
+//! from `u` to lights monotone, so stratified `u` stay stratified over the lights (pbrt's
 //! single-pass reservoir does not: its choice jumps around as `u` moves), and the lights are
 //! laid out in Morton order of their centres, so that neighbouring `u` pick neighbouring
 //! lights in space, not in file order (on `cornell-32x32`, direct light, 16 spp, 320 × 240:
@@ -15,6 +15,7 @@ use std::cell::RefCell;
 
 use super::{LightSampler, SampledLight, ShadingContext};
 use crate::light::{BoundsPacket, Light, LightBounds, LightId};
+use crate::math::distribution::{RANGE, Split, probability};
 
 thread_local! {
     /// Importances of the current shading point, reused across calls.
@@ -75,55 +76,36 @@ impl LocalSampler {
             + (self.order.capacity() + self.slot.capacity()) * 4
     }
 
-    /// Fills `out` with every light's importance at `ctx` and returns their f64 sum (summed
-    /// in light order, the same order `pmf` uses).
-    fn importances(&self, ctx: &ShadingContext, out: &mut Vec<f32>) -> f64 {
+    /// Fills `out` with every light's importance at `ctx`, in slot (Morton) order.
+    fn importances(&self, ctx: &ShadingContext, out: &mut Vec<f32>) {
         out.clear();
-        let mut total = 0.0f64;
-        for packet in &self.packets {
-            for w in packet.importance(ctx.p, ctx.n).to_array() {
-                out.push(w);
-                total += w as f64;
-            }
-        }
+        out.extend(self.packets.iter().flat_map(|p| p.importance(ctx.p, ctx.n).to_array()));
         out.truncate(self.order.len());
-        total
     }
 }
 
 impl LightSampler for LocalSampler {
-    fn sample(&self, ctx: &ShadingContext, u: f32) -> Option<SampledLight> {
+    fn sample(&self, ctx: &ShadingContext, u: u64) -> Option<SampledLight> {
         SCRATCH.with_borrow_mut(|w| {
-            let total = self.importances(ctx, w);
-            if !(total > 0.0) {
-                return None;
-            }
-            // The light whose cumulative range holds u·total; the last positive light takes
-            // any round-off remainder.
-            let target = u as f64 * total;
-            let last = w.iter().rposition(|&x| x > 0.0)?;
-            let mut below = 0.0f64;
-            let mut chosen = last;
-            for (i, &x) in w[..last].iter().enumerate() {
-                below += x as f64;
-                if target < below && x > 0.0 {
-                    chosen = i;
-                    break;
-                }
-            }
-            Some(SampledLight { light: LightId(self.order[chosen]), pmf: (w[chosen] as f64 / total) as f32 })
+            self.importances(ctx, w);
+            let mut split = Split::new(RANGE, w.iter().copied())?;
+            let u = u as u128;
+            w.iter().enumerate().find_map(|(slot, &x)| {
+                let (start, end) = split.next(x);
+                (u < end).then(|| SampledLight { light: LightId(self.order[slot]), pmf: probability(end - start) })
+            })
         })
     }
 
-    fn pmf(&self, ctx: &ShadingContext, light: LightId) -> f32 {
-        let s = self.slot[light.0 as usize] as usize;
-        let (k, lane) = (s / 4, s % 4);
-        let w = self.packets[k].importance(ctx.p, ctx.n).to_array()[lane] as f64;
-        if w <= 0.0 {
-            return 0.0;
-        }
-        let total: f64 =
-            self.packets.iter().flat_map(|p| p.importance(ctx.p, ctx.n).to_array()).map(|x| x as f64).sum();
-        (w / total) as f32
+    fn cell(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
+        let slot = self.slot[light.0 as usize] as usize;
+        SCRATCH.with_borrow_mut(|w| {
+            self.importances(ctx, w);
+            let Some(mut split) = Split::new(RANGE, w.iter().copied()) else { return (0, 0) };
+            for &x in &w[..slot] {
+                split.next(x);
+            }
+            split.next(w[slot])
+        })
     }
 }

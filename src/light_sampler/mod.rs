@@ -17,6 +17,7 @@ pub use uniform::UniformSampler;
 
 use crate::light::{Light, LightId};
 use crate::math::Vec3A;
+use crate::math::distribution::probability;
 
 /// Where a light is chosen for: a point and its (face-forwarded shading) normal. `n` is zero
 /// when the point is not on a surface. The same context must be used at `sample` time and
@@ -38,16 +39,28 @@ pub struct SampledLight {
     pub pmf: f32,
 }
 
-/// Chooses one light for a shading point.
+/// Chooses one light for a shading point with one 64-bit random number.
 ///
-/// Contract: Σ over lights of `pmf(ctx, l)` ≤ 1, equal to 1 unless `sample` can return
-/// `None`; `pmf(ctx, l) == 0` only if `l` contributes nothing at `ctx`; `sample` consumes
-/// exactly the one number `u ∈ [0,1)` and reports the same pmf that `pmf` computes.
+/// Contract: the 2⁶⁴ values of `u` are shared among the lights in disjoint [`cell`]s, so a
+/// light's probability is exactly its cell's width / 2⁶⁴ ([`pmf`]), and `sample` reports the
+/// very pmf that `pmf` computes; values in no cell make `sample` return `None` (no light can
+/// contribute); a cell is empty only where its light contributes nothing at `ctx`.
+///
+/// [`cell`]: LightSampler::cell
+/// [`pmf`]: LightSampler::pmf
 pub trait LightSampler: Sync {
-    /// Picks a light with `u`; `None` when no light can contribute.
-    fn sample(&self, ctx: &ShadingContext, u: f32) -> Option<SampledLight>;
-    /// Probability that `sample` picks `light` at `ctx`.
-    fn pmf(&self, ctx: &ShadingContext, light: LightId) -> f32;
+    /// Picks a light with `u` (all 2⁶⁴ values equally likely); `None` when no light can
+    /// contribute.
+    fn sample(&self, ctx: &ShadingContext, u: u64) -> Option<SampledLight>;
+    /// The values of `u` for which `sample` picks `light` at `ctx`: `start..end`, as
+    /// (start, end); empty when it never does.
+    fn cell(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128);
+    /// Probability that `sample` picks `light` at `ctx`: its cell's share of the 2⁶⁴ values.
+    #[inline]
+    fn pmf(&self, ctx: &ShadingContext, light: LightId) -> f32 {
+        let (start, end) = self.cell(ctx, light);
+        probability(end - start)
+    }
 }
 
 /// The light-selection strategies the `--sampler` switch names.
@@ -109,7 +122,7 @@ pub enum AnyLightSampler {
 
 impl LightSampler for AnyLightSampler {
     #[inline]
-    fn sample(&self, ctx: &ShadingContext, u: f32) -> Option<SampledLight> {
+    fn sample(&self, ctx: &ShadingContext, u: u64) -> Option<SampledLight> {
         match self {
             AnyLightSampler::Uniform(s) => s.sample(ctx, u),
             AnyLightSampler::Power(s) => s.sample(ctx, u),
@@ -119,12 +132,12 @@ impl LightSampler for AnyLightSampler {
     }
 
     #[inline]
-    fn pmf(&self, ctx: &ShadingContext, light: LightId) -> f32 {
+    fn cell(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
         match self {
-            AnyLightSampler::Uniform(s) => s.pmf(ctx, light),
-            AnyLightSampler::Power(s) => s.pmf(ctx, light),
-            AnyLightSampler::Local(s) => s.pmf(ctx, light),
-            AnyLightSampler::Tree(s) => s.pmf(ctx, light),
+            AnyLightSampler::Uniform(s) => s.cell(ctx, light),
+            AnyLightSampler::Power(s) => s.cell(ctx, light),
+            AnyLightSampler::Local(s) => s.cell(ctx, light),
+            AnyLightSampler::Tree(s) => s.cell(ctx, light),
         }
     }
 }
@@ -151,7 +164,7 @@ impl AnyLightSampler {
     /// [`LightSampler::sample`], fetching the candidate lights from `lights` while the tree
     /// chooses among them (the other samplers choose without looking at any light).
     #[inline]
-    pub fn sample_prefetching(&self, ctx: &ShadingContext, u: f32, lights: &[Light]) -> Option<SampledLight> {
+    pub fn sample_prefetching(&self, ctx: &ShadingContext, u: u64, lights: &[Light]) -> Option<SampledLight> {
         match self {
             AnyLightSampler::Tree(s) => s.sample_hinting(ctx, u, |i| prefetch(lights, i as usize)),
             _ => self.sample(ctx, u),

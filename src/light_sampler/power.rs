@@ -2,7 +2,8 @@
 //!
 //! Lights whose power estimate is 0 would never be chosen, which biases the image whenever
 //! the estimate is wrong (pbrt drops them). Every light here gets at least a floor of 1e-6
-//! of the mean power, so nothing that can contribute has pmf 0.
+//! of the mean power, so nothing that can contribute has pmf 0 (and `Distribution1D` gives
+//! every positive weight at least one of the 2⁶⁴ values, however many lights there are).
 
 use super::{LightSampler, SampledLight, ShadingContext};
 use crate::light::{Light, LightId};
@@ -20,8 +21,9 @@ impl PowerSampler {
         let powers: Vec<f32> = lights.iter().map(|l| l.power(scene_radius).max(0.0)).collect();
         let mean = powers.iter().map(|&p| p as f64).sum::<f64>() / powers.len().max(1) as f64;
         let floor = if mean > 0.0 { (mean * 1e-6) as f32 } else { 1.0 };
-        let distribution = Distribution1D::new(powers.into_iter().map(|p| p.max(floor)))
-            .expect("light powers are finite and positive after the floor");
+        let weights: Vec<f32> = powers.into_iter().map(|p| p.max(floor)).collect();
+        let distribution =
+            Distribution1D::new(&weights).expect("every weight is at least the floor, which is positive");
         Self { distribution }
     }
 
@@ -33,13 +35,13 @@ impl PowerSampler {
 
 impl LightSampler for PowerSampler {
     #[inline]
-    fn sample(&self, _ctx: &ShadingContext, u: f32) -> Option<SampledLight> {
+    fn sample(&self, _ctx: &ShadingContext, u: u64) -> Option<SampledLight> {
         let s = self.distribution.sample(u);
         Some(SampledLight { light: LightId(s.index as u32), pmf: s.pmf })
     }
 
     #[inline]
-    fn pmf(&self, _ctx: &ShadingContext, light: LightId) -> f32 {
-        self.distribution.pmf(light.0 as usize)
+    fn cell(&self, _ctx: &ShadingContext, light: LightId) -> (u128, u128) {
+        self.distribution.cell(light.0 as usize)
     }
 }

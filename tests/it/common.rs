@@ -4,7 +4,9 @@
 use myriad::light::LightId;
 use myriad::light_sampler::{LightSampler, ShadingContext};
 use myriad::material::Material;
+use myriad::math::distribution::{RANGE, probability};
 use myriad::math::{Mat4, Rgb, UVec2, Vec3A};
+use myriad::sampling::fmix64;
 use myriad::scene::description::{CameraDesc, CameraPlacement, InstanceDesc, LightDesc, MeshDesc, SceneDescription};
 use myriad::scene::{BuildOptions, Scene, build};
 use std::sync::Arc;
@@ -207,39 +209,80 @@ pub fn quad_light(corner: Vec3A, e1: Vec3A, e2: Vec3A, radiance: Rgb, two_sided:
     LightDesc::Quad { name: Arc::from("test quad"), corner, edge1: e1, edge2: e2, radiance, two_sided }
 }
 
-/// Checks the sampler contract at `ctx` over `n` lights: Σ pmf within [1 − tol, 1 + tol]
-/// (or ≤ 1 when `sample` may return None), sample/pmf agreement, and a pooled chi-square of
-/// `draws` stratified picks against the pmf. Returns the chi-square p-value.
-pub fn check_sampler_at(sampler: &impl LightSampler, ctx: &ShadingContext, n: usize, draws: usize) -> f64 {
-    let pmfs: Vec<f64> = (0..n).map(|i| sampler.pmf(ctx, LightId(i as u32)) as f64).collect();
-    let total: f64 = pmfs.iter().sum();
-    assert!(total <= 1.0 + 1e-4, "pmf sums to {total} > 1 at {ctx:?}");
-    let mut counts = vec![0.0f64; n];
-    let mut none = 0usize;
-    for k in 0..draws {
-        let u = (k as f32 + 0.5) / draws as f32;
-        match sampler.sample(ctx, u) {
-            Some(s) => {
-                let p = pmfs[s.light.0 as usize] as f32;
-                assert!(s.pmf > 0.0, "sampled a light with pmf 0");
-                assert!(
-                    (s.pmf - p).abs() <= 1e-4 * p.max(1e-30),
-                    "sample pmf {} vs pmf() {p} for light {}",
-                    s.pmf,
-                    s.light.0
-                );
-                counts[s.light.0 as usize] += 1.0;
-            }
-            None => none += 1,
+/// Draw `k` of the independent uniform 64-bit stream `salt` (SplitMix64's output mix).
+pub fn draw(k: u64, salt: u64) -> u64 {
+    fmix64(fmix64(salt ^ 0x5851_f42d_4c95_7f2d) ^ k.wrapping_mul(0x9e37_79b9_7f4a_7c15))
+}
+
+/// The lights' cells at `ctx` tile the 2⁶⁴ values (apart from values that pick nothing, where
+/// `sample` must say `None`), every non-empty cell picks its light at both ends and reports its
+/// width as the pmf, and the pmfs sum to the share of values that pick something. Exact: no
+/// statistics.
+pub fn check_cells_at(sampler: &impl LightSampler, ctx: &ShadingContext, n: usize) {
+    let mut cells: Vec<(u128, u128, u32)> = (0..n as u32)
+        .map(|i| {
+            let (a, b) = sampler.cell(ctx, LightId(i));
+            assert!(a <= b && b <= RANGE, "light {i}: cell {a}..{b}");
+            assert_eq!(sampler.pmf(ctx, LightId(i)), probability(b - a), "light {i}");
+            (a, b, i)
+        })
+        .filter(|c| c.1 > c.0)
+        .collect();
+    cells.sort();
+    let mut covered = 0u128;
+    let mut end = 0u128;
+    for &(a, b, i) in &cells {
+        assert!(a >= end, "cells overlap at light {i}");
+        if a > end {
+            // A gap: values that pick no light.
+            assert_eq!(sampler.sample(ctx, end as u64), None, "gap before light {i}");
         }
+        for u in [a, b - 1, a + (b - a) / 2] {
+            let s = sampler.sample(ctx, u as u64).unwrap_or_else(|| panic!("light {i}'s cell picks nothing"));
+            assert_eq!((s.light.0, s.pmf), (i, probability(b - a)), "value {u} in light {i}'s cell");
+        }
+        covered += b - a;
+        end = b;
     }
-    let none_rate = none as f64 / draws as f64;
-    assert!(
-        (1.0 - total - none_rate).abs() < 1e-3 + 5.0 / (draws as f64).sqrt(),
-        "Σpmf {total} but None rate {none_rate}"
-    );
-    let expected: Vec<f64> = pmfs.iter().map(|p| p * draws as f64).collect();
-    chi_square(&counts, &expected).p
+    if end < RANGE {
+        assert_eq!(sampler.sample(ctx, u64::MAX), None, "values past the last cell");
+    }
+    let total: f64 = (0..n as u32).map(|i| sampler.pmf(ctx, LightId(i)) as f64).sum();
+    assert!((total - covered as f64 / RANGE as f64).abs() < 1e-5, "Σ pmf {total}, cells cover {covered}");
+}
+
+/// Pick counts of `draws` independent numbers at `ctx` (drawn on every core) against the
+/// pmf, cells pooled to at least 5 expected picks, with one cell for `None`: a chi-square
+/// test. Also checks that no pick has pmf 0.
+pub fn pick_chi_square(
+    sampler: &impl LightSampler,
+    ctx: &ShadingContext,
+    n: usize,
+    draws: u64,
+    salt: u64,
+) -> ChiSquare {
+    use rayon::prelude::*;
+    let pmfs: Vec<f64> = (0..n as u32).into_par_iter().map(|i| sampler.pmf(ctx, LightId(i)) as f64).collect();
+    let counts = (0..draws)
+        .into_par_iter()
+        .fold(
+            || vec![0u32; n + 1],
+            |mut c, k| {
+                match sampler.sample(ctx, draw(k, salt)) {
+                    Some(s) => {
+                        assert!(s.pmf > 0.0, "sampled light {} with pmf 0", s.light.0);
+                        c[s.light.0 as usize] += 1;
+                    }
+                    None => c[n] += 1,
+                }
+                c
+            },
+        )
+        .reduce(|| vec![0u32; n + 1], |a, b| a.iter().zip(&b).map(|(x, y)| x + y).collect());
+    let counts: Vec<f64> = counts.into_iter().map(f64::from).collect();
+    let mut expected: Vec<f64> = pmfs.iter().map(|p| p * draws as f64).collect();
+    expected.push((1.0 - pmfs.iter().sum::<f64>()).max(0.0) * draws as f64);
+    chi_square(&counts, &expected)
 }
 
 #[cfg(test)]

@@ -5,10 +5,13 @@
 //!   (`build.rs`) is collapsed so that one decision weighs four tighter clusters instead of
 //!   two looser ones (Psychopath and Luminary report wider trees sample better); a node is
 //!   128 bytes (`compact.rs`) and one SSE evaluation yields all four importances.
-//! - **One number, remapped down the tree in f64**, so the stratification of `u` survives
-//!   and 20+ levels do not collapse neighbouring `u` onto one light.
-//! - **Exact pmf by replaying the light's path**: a 64-bit trail (2 bits per level) per
-//!   light; the build caps the depth so the trail cannot overflow (pbrt's 32-bit trail can).
+//! - **One 64-bit number, split exactly down the tree**: each node shares the values that
+//!   reached it among its children by [`Split`], and passes the chosen child's run on, so
+//!   the stratification of `u` survives, 20+ levels do not collapse neighbouring `u` onto one
+//!   light, and a light's pmf is exactly the share of the 2⁶⁴ values that reach it.
+//! - **The pmf by replaying the light's path**: a 64-bit trail (2 bits per level) per light
+//!   leads to the same splits, so `pmf` reports bit for bit what `sample` does; the build
+//!   caps the depth so the trail cannot overflow (pbrt's 32-bit trail can).
 //! - **Directional lights inside the tree**: they form their own subtree under the root,
 //!   with importance = irradiance × the best cosine to the receiver, so a sun below the
 //!   horizon gets no samples and a bright sun is not starved by a fixed share (pbrt gives
@@ -31,6 +34,7 @@ use self::compact::{Node, Quantizer};
 use super::{LightSampler, SampledLight, ShadingContext, prefetch};
 use crate::light::{Light, LightId};
 use crate::math::Vec3A;
+use crate::math::distribution::{RANGE, Split, probability};
 
 /// Children per node.
 const WIDTH: usize = 4;
@@ -64,11 +68,12 @@ pub struct LightTree {
     stats: TreeStats,
 }
 
-/// Importances of a node's children at `ctx` (0 for empty slots), and their sum.
+/// Importances of a node's children at `ctx` (0 for empty slots), and how `range` values
+/// split among them (`None` when every importance is 0).
 #[inline]
-fn importances(node: &Node, grid: &Quantizer, ctx: &ShadingContext) -> ([f64; WIDTH], f64) {
-    let imp = node.decode(grid).importance(ctx.p, ctx.n).to_array().map(|x| x as f64);
-    (imp, imp.iter().sum())
+fn children_split(node: &Node, grid: &Quantizer, ctx: &ShadingContext, range: u128) -> Option<([f32; WIDTH], Split)> {
+    let imp = node.decode(grid).importance(ctx.p, ctx.n).to_array();
+    Split::new(range, imp).map(|s| (imp, s))
 }
 
 impl LightTree {
@@ -130,8 +135,9 @@ impl LightTree {
     /// children of each node visited before choosing: the caller can start fetching the
     /// light it will shade (at 10⁶ lights, otherwise a certain cache miss per sample).
     #[inline]
-    pub fn sample_hinting(&self, ctx: &ShadingContext, u: f32, leaf_hint: impl Fn(u32)) -> Option<SampledLight> {
-        let (mut u, mut pmf, mut node) = (u as f64, 1.0f64, 0usize);
+    pub fn sample_hinting(&self, ctx: &ShadingContext, u: u64, leaf_hint: impl Fn(u32)) -> Option<SampledLight> {
+        // `u` as an offset into the run of `range` values that reached `node`.
+        let (mut u, mut range, mut node) = (u as u128, RANGE, 0usize);
         for _ in 0..MAX_DEPTH {
             let n = &self.nodes[node];
             // The chosen child is known only after the importances: fetch all children
@@ -143,29 +149,14 @@ impl LightTree {
                     leaf_hint(c & !LEAF);
                 }
             }
-            let (imp, total) = importances(n, &self.grid, ctx);
-            if !(total > 0.0) {
-                return None;
-            }
-            // The child whose cumulative range holds u·total; the last positive child takes
-            // any round-off remainder.
-            let target = u * total;
-            let last = (0..WIDTH).rev().find(|&j| imp[j] > 0.0).expect("total > 0");
-            let (mut k, mut below) = (last, 0.0);
-            for (j, &w) in imp[..last].iter().enumerate() {
-                if w > 0.0 {
-                    if target < below + w {
-                        k = j;
-                        break;
-                    }
-                    below += w;
-                }
-            }
-            u = ((target - below) / imp[k]).clamp(0.0, 1.0 - f64::EPSILON);
-            pmf *= imp[k] / total;
+            let (imp, mut split) = children_split(n, &self.grid, ctx, range)?;
+            // The child whose cell holds u (the cells tile the range, so one does).
+            let (k, (start, end)) =
+                imp.iter().map(|&w| split.next(w)).enumerate().find(|(_, (_, end))| u < *end).expect("cells tile");
+            (u, range) = (u - start, end - start);
             let child = n.children[k];
             if child & LEAF != 0 {
-                return Some(SampledLight { light: LightId(child & !LEAF), pmf: pmf as f32 });
+                return Some(SampledLight { light: LightId(child & !LEAF), pmf: probability(range) });
             }
             node = child as usize;
         }
@@ -175,30 +166,28 @@ impl LightTree {
 
 impl LightSampler for LightTree {
     #[inline]
-    fn sample(&self, ctx: &ShadingContext, u: f32) -> Option<SampledLight> {
+    fn sample(&self, ctx: &ShadingContext, u: u64) -> Option<SampledLight> {
         self.sample_hinting(ctx, u, |_| {})
     }
 
     #[inline]
-    fn pmf(&self, ctx: &ShadingContext, light: LightId) -> f32 {
-        let (mut trail, mut p, mut node) = (self.trails[light.0 as usize], 1.0f64, 0usize);
+    fn cell(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
+        let (mut trail, mut start, mut range, mut node) = (self.trails[light.0 as usize], 0u128, RANGE, 0usize);
         for _ in 0..MAX_DEPTH {
             let n = &self.nodes[node];
             let k = (trail & 3) as usize;
+            trail >>= 2;
             // The path is known: fetch the next node while this one is evaluated.
             if n.children[k] & LEAF == 0 {
                 prefetch(&self.nodes, n.children[k] as usize);
             }
-            let (imp, total) = importances(n, &self.grid, ctx);
-            trail >>= 2;
-            if !(imp[k] > 0.0) {
-                return 0.0;
-            }
-            p *= imp[k] / total;
+            let Some((imp, mut split)) = children_split(n, &self.grid, ctx, range) else { return (start, start) };
+            let (a, b) = imp[..=k].iter().map(|&w| split.next(w)).last().expect("k < WIDTH");
+            (start, range) = (start + a, b - a);
             let child = n.children[k];
-            if child & LEAF != 0 {
-                debug_assert_eq!(child & !LEAF, light.0, "trail leads to another light");
-                return p as f32;
+            if child & LEAF != 0 || range == 0 {
+                debug_assert!(range == 0 || child & !LEAF == light.0, "trail leads to another light");
+                return (start, start + range);
             }
             node = child as usize;
         }
@@ -211,6 +200,11 @@ mod tests {
     use super::*;
     use crate::light::{AreaEmission, DistantLight, QuadLight};
     use crate::math::Rgb;
+
+    /// The selection number at fraction `f` of its range.
+    fn at(f: f64) -> u64 {
+        (f * RANGE as f64) as u64
+    }
 
     fn grid(n: usize) -> Vec<Light> {
         (0..n)
@@ -230,12 +224,16 @@ mod tests {
         assert!(tree.stats().depth <= 12, "{:?}", tree.stats());
         let ctx = ShadingContext { p: Vec3A::new(1.0, 0.0, 1.0), n: Vec3A::Y };
         for k in 0..10_000 {
-            let s = tree.sample(&ctx, (k as f32 + 0.5) / 10_000.0).unwrap();
-            let p = tree.pmf(&ctx, s.light);
-            assert!((p - s.pmf).abs() <= 1e-5 * p, "{} vs {p}", s.pmf);
+            let u = at((k as f64 + 0.5) / 10_000.0);
+            let s = tree.sample(&ctx, u).unwrap();
+            assert_eq!(tree.pmf(&ctx, s.light), s.pmf);
+            let (start, end) = tree.cell(&ctx, s.light);
+            assert!(start <= u as u128 && (u as u128) < end);
         }
-        let total: f64 = (0..lights.len()).map(|i| tree.pmf(&ctx, LightId(i as u32)) as f64).sum();
-        assert!((total - 1.0).abs() < 1e-5, "{total}");
+        // The cells tile the range.
+        let mut cells: Vec<_> = (0..lights.len()).map(|i| tree.cell(&ctx, LightId(i as u32))).collect();
+        cells.sort();
+        assert!(cells.windows(2).all(|c| c[0].1 == c[1].0) && cells[0].0 == 0 && cells.last().unwrap().1 == RANGE);
     }
 
     #[test]
@@ -254,7 +252,7 @@ mod tests {
         }
         let ctx = ShadingContext { p: Vec3A::new(1.0, 0.0, 1.0), n: Vec3A::Y };
         for k in 0..100 {
-            let u = (k as f32 + 0.5) / 100.0;
+            let u = at((k as f64 + 0.5) / 100.0);
             assert_eq!(one.sample(&ctx, u), three.sample(&ctx, u));
         }
     }
@@ -271,10 +269,10 @@ mod tests {
         let lights = grid(1);
         let tree = LightTree::new(&lights);
         let ctx = ShadingContext { p: Vec3A::ZERO, n: Vec3A::Y };
-        assert_eq!(tree.sample(&ctx, 0.3), Some(SampledLight { light: LightId(0), pmf: 1.0 }));
+        assert_eq!(tree.sample(&ctx, at(0.3)), Some(SampledLight { light: LightId(0), pmf: 1.0 }));
         // Below the horizon: nothing to sample.
         let under = ShadingContext { p: Vec3A::new(0.0, 3.0, 0.0), n: Vec3A::Y };
-        assert_eq!(tree.sample(&under, 0.3), None);
+        assert_eq!(tree.sample(&under, at(0.3)), None);
         assert_eq!(tree.pmf(&under, LightId(0)), 0.0);
     }
 }
