@@ -29,13 +29,16 @@ pub fn probability(width: u128) -> f32 {
 #[derive(Clone, Copy, Debug)]
 pub struct Split {
     range: u128,
-    total: f64,
-    positive: u64,
+    /// `range − positive` (values beyond the one each positive weight is given), or 0.
+    spread: u128,
+    /// `spread / total`: values per unit of weight.
+    scale: f64,
+    positive: u32,
     infinite: bool,
     /// Sum of the weights consumed so far.
     acc: f64,
     /// Positive weights consumed so far.
-    seen: u64,
+    seen: u32,
     /// End of the last cell.
     end: u128,
 }
@@ -53,39 +56,51 @@ fn clean(w: f32, infinite: bool) -> f64 {
 }
 
 impl Split {
-    /// Prepares to split `range` among `weights` (which [`Split::next`] must then see in the
-    /// same order); `None` when no weight is positive.
-    #[inline]
+    /// Prepares to split `range` (at most 2⁶⁴) among `weights` (fewer than 2³²; which
+    /// [`Split::next`] must then see in the same order); `None` when no weight is positive.
+    #[inline(always)]
     pub fn new(range: u128, weights: impl IntoIterator<Item = f32> + Clone) -> Option<Self> {
-        let infinite = weights.clone().into_iter().any(|w| w == f32::INFINITY);
-        let (mut total, mut positive) = (0.0f64, 0u64);
-        for w in weights {
-            let c = clean(w, infinite);
-            total += c;
-            positive += (c > 0.0) as u64;
+        debug_assert!(range <= RANGE);
+        let sum = |infinite: bool| {
+            weights.clone().into_iter().fold((0.0f64, 0u32), |(total, positive), w| {
+                let c = clean(w, infinite);
+                (total + c, positive + (c > 0.0) as u32)
+            })
+        };
+        // Fewer than 2³² finite f32 weights cannot overflow an f64 sum: an infinite total
+        // means an infinite weight.
+        let (mut total, mut positive) = sum(false);
+        let infinite = total.is_infinite();
+        if infinite {
+            (total, positive) = sum(true);
         }
-        (positive > 0).then_some(Self { range, total, positive, infinite, acc: 0.0, seen: 0, end: 0 })
+        if positive == 0 {
+            return None;
+        }
+        let spread = range.saturating_sub(positive as u128);
+        // u64 → f64 is one instruction where u128 → f64 is a library call.
+        let scale = (spread.min(u64::MAX as u128) as u64) as f64 / total;
+        Some(Self { range, spread, scale, positive, infinite, acc: 0.0, seen: 0, end: 0 })
     }
 
     /// The cell of the next weight: `start..end` as (start, end).
-    #[inline]
+    #[inline(always)]
     pub fn next(&mut self, w: f32) -> (u128, u128) {
         let start = self.end;
         let c = clean(w, self.infinite);
         if c > 0.0 {
             self.acc += c;
             self.seen += 1;
-            let (seen, positive) = (self.seen as u128, self.positive as u128);
             self.end = if self.seen == self.positive {
                 self.range
-            } else if self.range >= positive {
-                let spread = self.range - positive;
-                let share = ((self.acc / self.total) * spread as f64) as u128;
-                seen + share.min(spread)
+            } else if self.range >= self.positive as u128 {
+                // f64 → u64 saturates, and the share never passes the spread.
+                let share = ((self.acc * self.scale) as u64 as u128).min(self.spread);
+                self.seen as u128 + share
             } else {
                 // Fewer values than positive weights (a range already narrowed to a few
                 // values): the first ones get one value each.
-                seen.min(self.range)
+                (self.seen as u128).min(self.range)
             };
         }
         (start, self.end)

@@ -70,7 +70,7 @@ pub struct LightTree {
 
 /// Importances of a node's children at `ctx` (0 for empty slots), and how `range` values
 /// split among them (`None` when every importance is 0).
-#[inline]
+#[inline(always)]
 fn children_split(node: &Node, grid: &Quantizer, ctx: &ShadingContext, range: u128) -> Option<([f32; WIDTH], Split)> {
     let imp = node.decode(grid).importance(ctx.p, ctx.n).to_array();
     Split::new(range, imp).map(|s| (imp, s))
