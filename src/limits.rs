@@ -63,7 +63,7 @@ pub fn memory_limit() -> MemoryLimit {
 /// Parses a size in GB (`"16"`, `"0.5"`) into bytes.
 pub fn parse_gb(text: &str) -> Option<u64> {
     let gb: f64 = text.trim().parse().ok()?;
-    (gb > 0.0 && gb <= 1e9).then(|| (gb * 1e9) as u64)
+    (gb > 0.0 && gb <= 1e9).then_some((gb * 1e9) as u64)
 }
 
 fn default_limit() -> MemoryLimit {
