@@ -9,6 +9,11 @@
 use crate::geometry::Ray;
 use crate::math::{Mat4, UVec2, Vec2, Vec3A};
 
+/// A camera position must be finite.
+fn check_position(name: &str, p: Vec3A) -> Result<(), String> {
+    if p.is_finite() { Ok(()) } else { Err(format!("its {name} {p} is not finite")) }
+}
+
 /// A pinhole camera.
 #[derive(Clone, Copy, Debug)]
 pub struct Camera {
@@ -22,29 +27,56 @@ pub struct Camera {
 
 impl Camera {
     /// A camera at `eye` looking at `target`, `up` giving the vertical, vertical field of view
-    /// `yfov` in radians. `None` when the view is degenerate (eye at target, up parallel to
-    /// the view direction) or the field of view is outside (0, π).
-    pub fn look_at(eye: Vec3A, target: Vec3A, up: Vec3A, yfov: f32, resolution: UVec2) -> Option<Self> {
-        let forward = (target - eye).try_normalize()?;
-        let right = forward.cross(up).try_normalize()?;
+    /// `yfov` in radians. An error says what makes the view degenerate, with the values.
+    pub fn look_at(eye: Vec3A, target: Vec3A, up: Vec3A, yfov: f32, resolution: UVec2) -> Result<Self, String> {
+        check_position("eye", eye)?;
+        check_position("target", target)?;
+        let d = target - eye;
+        if !d.is_finite() {
+            return Err(format!("the eye {eye} and the target {target} are too far apart"));
+        }
+        // Scaled first, so that a long but finite view does not overflow its length.
+        let forward = (d / d.abs().max_element())
+            .try_normalize()
+            .ok_or_else(|| format!("the eye {eye} is at the target {target}"))?;
+        let right = forward
+            .cross(up)
+            .try_normalize()
+            .ok_or_else(|| format!("up {up} is zero or parallel to the view direction {forward}"))?;
         let up = right.cross(forward);
         Self::new(eye, right, up, forward, yfov, resolution)
     }
 
     /// A camera placed by a node's world matrix (glTF: looks down local −Z, +Y up).
-    pub fn from_matrix(world: &Mat4, yfov: f32, resolution: UVec2) -> Option<Self> {
+    pub fn from_matrix(world: &Mat4, yfov: f32, resolution: UVec2) -> Result<Self, String> {
         let origin = Vec3A::from(world.w_axis.truncate());
-        let forward = (-Vec3A::from(world.z_axis.truncate())).try_normalize()?;
+        check_position("position", origin)?;
+        let back = Vec3A::from(world.z_axis.truncate());
+        let forward =
+            (-back).try_normalize().ok_or_else(|| format!("its matrix's Z axis {back} is zero or not finite"))?;
         let up_hint = Vec3A::from(world.y_axis.truncate());
-        let right = forward.cross(up_hint).try_normalize()?;
+        let right = forward.cross(up_hint).try_normalize().ok_or_else(|| {
+            format!("its matrix's Y axis {up_hint} is zero or parallel to its view direction {forward}")
+        })?;
         let up = right.cross(forward);
         Self::new(origin, right, up, forward, yfov, resolution)
     }
 
-    fn new(origin: Vec3A, right: Vec3A, up: Vec3A, forward: Vec3A, yfov: f32, resolution: UVec2) -> Option<Self> {
-        let ok =
-            yfov > 0.0 && yfov < std::f32::consts::PI && resolution.x > 0 && resolution.y > 0 && origin.is_finite();
-        ok.then_some(Self { origin, right, up, forward, tan_half_fov_y: (0.5 * yfov).tan(), resolution })
+    fn new(
+        origin: Vec3A,
+        right: Vec3A,
+        up: Vec3A,
+        forward: Vec3A,
+        yfov: f32,
+        resolution: UVec2,
+    ) -> Result<Self, String> {
+        if !(yfov > 0.0 && yfov < std::f32::consts::PI) {
+            return Err(format!("its vertical field of view {}° is not between 0° and 180°", yfov.to_degrees()));
+        }
+        if resolution.min_element() == 0 {
+            return Err(format!("the image size {} × {} is empty", resolution.x, resolution.y));
+        }
+        Ok(Self { origin, right, up, forward, tan_half_fov_y: (0.5 * yfov).tan(), resolution })
     }
 
     /// The same camera rendering at another resolution (vertical field of view kept).
@@ -97,8 +129,14 @@ mod tests {
         // Pixel (0,0) is top-left.
         let tl = cam.ray(UVec2::ZERO, Vec2::ZERO);
         assert!(tl.dir.x < 0.0 && tl.dir.y > 0.0);
-        assert!(Camera::look_at(Vec3A::ZERO, Vec3A::ZERO, Vec3A::Y, 0.6, res).is_none());
-        assert!(Camera::look_at(Vec3A::ZERO, Vec3A::Y, Vec3A::Y, 0.6, res).is_none());
+        let e = Camera::look_at(Vec3A::ZERO, Vec3A::ZERO, Vec3A::Y, 0.6, res).unwrap_err();
+        assert!(e.contains("is at the target"), "{e}");
+        let e = Camera::look_at(Vec3A::ZERO, Vec3A::Y, Vec3A::Y, 0.6, res).unwrap_err();
+        assert!(e.contains("parallel") && e.contains("[0, 1, 0]"), "{e}");
+        let e = Camera::look_at(Vec3A::ZERO, Vec3A::X, Vec3A::Y, 3.5, res).unwrap_err();
+        assert!(e.contains("200.5"), "{e}");
+        let e = Camera::look_at(Vec3A::splat(f32::INFINITY), Vec3A::X, Vec3A::Y, 0.6, res).unwrap_err();
+        assert!(e.contains("eye"), "{e}");
     }
 
     #[test]

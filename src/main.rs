@@ -13,7 +13,7 @@ use myriad::io::LoadOptions;
 use myriad::light_sampler::LightSamplerKind;
 use myriad::math::UVec2;
 use myriad::render::Budget;
-use myriad::scene::BuildOptions;
+use myriad::scene::{BuildOptions, MAX_RESOLUTION};
 
 /// myriad: a path tracer for scenes lit by very many lights.
 ///
@@ -25,9 +25,14 @@ use myriad::scene::BuildOptions;
 struct Cli {
     #[command(subcommand)]
     command: Command,
-    /// Worker threads (default: all cores). Results are identical for any value.
-    #[arg(long, global = true)]
-    threads: Option<usize>,
+    /// Worker threads, 1 to 1024 (default: all cores). Results are identical for any value.
+    #[arg(long, global = true, value_parser = clap::value_parser!(u16).range(1..=1024))]
+    threads: Option<u16>,
+    /// Most memory, in GB, a scene, an image or a file may make myriad allocate; larger
+    /// inputs are refused before allocating [default: 3/4 of what the machine lets the
+    /// process use; also MYRIAD_MAX_MEMORY].
+    #[arg(long, global = true, value_parser = parse_gigabytes)]
+    max_memory: Option<u64>,
 }
 
 #[derive(Subcommand)]
@@ -106,7 +111,7 @@ struct RenderArgs {
     #[arg(long, conflicts_with = "png")]
     no_png: bool,
     /// PNG preview exposure, in stops.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_exposure)]
     exposure: f32,
     /// Extra EXR channels, comma-separated: albedo, normal, depth, variance.
     #[arg(long, value_delimiter = ',', value_parser = ["albedo", "normal", "depth", "variance"])]
@@ -160,7 +165,7 @@ struct CompareArgs {
     #[arg(long)]
     camera: Option<String>,
     /// Exposure of the previews, in stops.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_exposure)]
     exposure: f32,
     /// Hide the progress bars.
     #[arg(long, short)]
@@ -191,22 +196,37 @@ impl LoadArgs {
 
 fn parse_seconds(s: &str) -> Result<Duration, String> {
     let v: f64 = s.parse().map_err(|_| format!("'{s}' is not a number of seconds"))?;
-    if v > 0.0 && v.is_finite() { Ok(Duration::from_secs_f64(v)) } else { Err("the time must be positive".into()) }
+    if !(v > 0.0) {
+        return Err("the time must be positive".into());
+    }
+    Duration::try_from_secs_f64(v).map_err(|_| format!("{s} seconds is longer than myriad can count"))
 }
 
 fn parse_resolution(s: &str) -> Result<UVec2, String> {
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT, e.g. 640x480"))?;
     let (w, h): (u32, u32) = (w.trim().parse().map_err(|_| "bad width")?, h.trim().parse().map_err(|_| "bad height")?);
-    if w == 0 || h == 0 || w > 32768 || h > 32768 {
-        return Err("width and height must be between 1 and 32768".into());
+    if w == 0 || h == 0 || w > MAX_RESOLUTION || h > MAX_RESOLUTION {
+        return Err(format!("width and height must be between 1 and {MAX_RESOLUTION}"));
     }
     Ok(UVec2::new(w, h))
 }
 
+fn parse_exposure(s: &str) -> Result<f32, String> {
+    let v: f32 = s.parse().map_err(|_| format!("'{s}' is not a number of stops"))?;
+    if v.is_finite() && v.abs() <= 64.0 { Ok(v) } else { Err("the exposure must be between -64 and 64 stops".into()) }
+}
+
+fn parse_gigabytes(s: &str) -> Result<u64, String> {
+    myriad::limits::parse_gb(s).ok_or_else(|| format!("'{s}' is not a positive number of gigabytes"))
+}
+
 fn run(cli: Cli) -> myriad::Result<()> {
+    if let Some(bytes) = cli.max_memory {
+        myriad::limits::set_memory_limit(bytes);
+    }
     if let Some(n) = cli.threads {
         rayon::ThreadPoolBuilder::new()
-            .num_threads(n.max(1))
+            .num_threads(n as usize)
             .build_global()
             .map_err(|e| myriad::Error::Usage(format!("cannot start {n} threads: {e}")))?;
     }

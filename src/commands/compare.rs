@@ -164,12 +164,13 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
     if opts.samplers.is_empty() || opts.seeds == 0 {
         return Err(Error::Usage("give at least one sampler and one seed".into()));
     }
-    crate::io::ensure_dir(&opts.out_dir)?;
     let scene_options = SceneOptions {
         load: opts.load,
         build: BuildOptions { resolution: opts.resolution, camera: opts.camera.clone() },
     };
+    // The scene must load before the output folder is made: a broken scene leaves nothing.
     let loaded = load_scene(Some(&opts.scene), &scene_options)?;
+    crate::io::ensure_dir(&opts.out_dir)?;
     let scene = &loaded.scene;
     let max_depth = opts.max_depth.or(scene.render.max_depth).unwrap_or(DEFAULT_MAX_DEPTH);
     let size = scene.camera.resolution();

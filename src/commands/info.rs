@@ -4,9 +4,10 @@ use std::collections::BTreeMap;
 use std::fmt;
 use std::path::Path;
 
-use super::{LoadedScene, SceneOptions, human_bytes, human_duration, load_scene};
+use super::{LoadedScene, SceneOptions, human_duration, load_scene};
 use crate::error::Result;
 use crate::light_sampler::{LightTree, TreeStats};
+use crate::limits::human_bytes;
 
 /// Everything `info` reports.
 pub struct InfoReport {
@@ -62,8 +63,8 @@ impl fmt::Display for InfoReport {
         writeln!(
             f,
             "memory       geometry + BVH {} ({per_tri:.0} B/triangle), lights {} ({per_light:.0} B/light)",
-            human_bytes(st.geometry_bytes),
-            human_bytes(st.light_bytes)
+            human_bytes(st.geometry_bytes as u64),
+            human_bytes(st.light_bytes as u64)
         )?;
         if let Some(t) = &self.tree {
             writeln!(
@@ -72,7 +73,7 @@ impl fmt::Display for InfoReport {
                 human_duration(t.build_time),
                 t.nodes,
                 t.depth,
-                human_bytes(t.memory_bytes),
+                human_bytes(t.memory_bytes as u64),
                 t.memory_bytes as f64 / s.lights.len() as f64
             )?;
         }

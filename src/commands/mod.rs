@@ -65,27 +65,14 @@ pub fn load_scene(path: Option<&Path>, options: &SceneOptions) -> Result<LoadedS
     let start = Instant::now();
     let desc = load_description(path, &options.load)?;
     let load_time = start.elapsed();
-    let scene = scene::build(desc, &options.build)?;
+    let source = desc.source.clone();
+    let scene = crate::guard::contain(&source, || scene::build(desc, &options.build))?;
     Ok(LoadedScene { scene, load_time })
 }
 
 /// `out.exr` → `out.png`.
 pub fn preview_path(exr: &Path) -> PathBuf {
     exr.with_extension("png")
-}
-
-/// Formats a byte count for people.
-pub fn human_bytes(b: usize) -> String {
-    let b = b as f64;
-    if b >= 1e9 {
-        format!("{:.2} GB", b / 1e9)
-    } else if b >= 1e6 {
-        format!("{:.1} MB", b / 1e6)
-    } else if b >= 1e3 {
-        format!("{:.1} kB", b / 1e3)
-    } else {
-        format!("{b} B")
-    }
 }
 
 /// Formats a duration for people.

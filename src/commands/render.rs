@@ -7,12 +7,13 @@ use std::time::{Duration, Instant};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::{
-    DEFAULT_MAX_DEPTH, DEFAULT_SCENE_NAME, DEFAULT_SPP, LoadedScene, SceneOptions, human_bytes, human_duration,
-    human_rate, load_scene,
+    DEFAULT_MAX_DEPTH, DEFAULT_SCENE_NAME, DEFAULT_SPP, LoadedScene, SceneOptions, human_duration, human_rate,
+    load_scene,
 };
 use crate::error::{Error, Result};
 use crate::film::AovSet;
 use crate::light_sampler::{LightSamplerKind, LightStrategy};
+use crate::limits::human_bytes;
 use crate::math::UVec2;
 use crate::render::{Budget, RenderOutput, RenderSettings, render as render_scene};
 use crate::scene::BuildOptions;
@@ -131,6 +132,7 @@ pub fn provenance(
 /// bad path fails in milliseconds, not after the render.
 pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
     let png = (!opts.no_png).then(|| opts.png.clone().unwrap_or_else(|| super::preview_path(&opts.output)));
+    check_outputs(&opts.output, png.as_deref())?;
     crate::io::check_writable(&opts.output)?;
     if let Some(p) = &png {
         crate::io::check_writable(p)?;
@@ -172,6 +174,26 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
     })
 }
 
+/// The EXR output is not a picture format's name and not the preview's path.
+fn check_outputs(exr: &Path, png: Option<&Path>) -> Result<()> {
+    let ext = exr.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    if let Some(ext @ ("png" | "jpg" | "jpeg")) = ext.as_deref() {
+        return Err(Error::Usage(format!(
+            "-o {} would write an EXR image under a .{ext} name; give -o a .exr path (the PNG preview \
+             goes beside it, or where --png says)",
+            exr.display()
+        )));
+    }
+    let same = |a: &Path, b: &Path| std::path::absolute(a).ok() == std::path::absolute(b).ok();
+    if let Some(png) = png.filter(|p| same(p, exr)) {
+        return Err(Error::Usage(format!(
+            "--png {} is the EXR output's own path; the preview would overwrite the image",
+            png.display()
+        )));
+    }
+    Ok(())
+}
+
 /// Renders a path list for the summary.
 fn paths(ps: &[PathBuf]) -> String {
     ps.iter().map(|p: &PathBuf| Path::display(p).to_string()).collect::<Vec<_>>().join(", ")
@@ -199,7 +221,7 @@ impl fmt::Display for RenderReport {
             human_duration(s.stats.bvh_build_time),
             self.sampler,
             human_duration(self.sampler_build_time),
-            human_bytes(self.sampler_bytes)
+            human_bytes(self.sampler_bytes as u64)
         )?;
         if let Some(t) = &self.tree {
             writeln!(f, "tree       {} nodes (4-wide), depth {}", t.nodes, t.depth)?;

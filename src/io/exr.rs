@@ -35,12 +35,35 @@ pub fn write(path: &Path, layers: &Layers, metadata: &[(String, String)]) -> Res
     })
 }
 
-/// Reads the first layer of an EXR file: its channels (as f32) and text attributes.
-pub fn read(path: &Path) -> Result<(Layers, Vec<(String, String)>)> {
-    let image = read_all_flat_layers_from_file(path).map_err(|e| match e {
+fn read_error(path: &Path, e: exr::error::Error) -> Error {
+    match e {
         exr::error::Error::Io(io) => Error::io(path, io),
         other => Error::Input { path: path.into(), message: format!("not a readable EXR image: {other}") },
-    })?;
+    }
+}
+
+/// Bytes reading every layer of the file described by `meta` takes: the samples as stored
+/// and as f32, and the chunk offset tables.
+fn bytes_to_read(meta: &exr::meta::MetaData) -> u64 {
+    meta.headers.iter().fold(0u64, |sum, h| {
+        let samples =
+            (h.layer_size.0 as u64).saturating_mul(h.layer_size.1 as u64).saturating_mul(h.channels.list.len() as u64);
+        sum.saturating_add(samples.saturating_mul(8)).saturating_add((h.chunk_count as u64).saturating_mul(8))
+    })
+}
+
+/// Reads the first layer of an EXR file: its channels (as f32) and text attributes. The
+/// header is read first, and an image larger than the memory limit is refused before its
+/// pixels are.
+pub fn read(path: &Path) -> Result<(Layers, Vec<(String, String)>)> {
+    crate::guard::contain(&path.display().to_string(), || read_checked(path))
+}
+
+fn read_checked(path: &Path) -> Result<(Layers, Vec<(String, String)>)> {
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| read_error(path, e))?;
+    crate::limits::check_memory(bytes_to_read(&meta), "this EXR image")
+        .map_err(|message| Error::Input { path: path.into(), message })?;
+    let image = read_all_flat_layers_from_file(path).map_err(|e| read_error(path, e))?;
     let layer = image
         .layer_data
         .first()

@@ -35,18 +35,25 @@ impl Default for LoadOptions {
 }
 
 /// Loads a scene file, choosing the loader by extension (`.ron`, `.obj`, `.gltf`, `.glb`).
+/// A dependency's panic on a file becomes an error naming it ([`crate::guard`]).
 pub fn load_scene(path: &Path, options: &LoadOptions) -> Result<SceneDescription> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
-    match ext.as_str() {
+    let file = path.display().to_string();
+    crate::guard::contain(&file, || match ext.as_str() {
         "ron" => ron::load(path, options),
         "obj" => obj::load_scene(path),
         "gltf" | "glb" => gltf::load(path, options),
         _ => Err(Error::scene(
-            path.display().to_string(),
+            &file,
             "file name",
             format!("unknown scene format '.{ext}'; myriad reads .ron, .obj, .gltf and .glb scenes"),
         )),
-    }
+    })
+}
+
+/// `text` without a leading UTF-8 byte-order mark, which some editors write.
+pub fn strip_bom(text: &str) -> &str {
+    text.strip_prefix('\u{feff}').unwrap_or(text)
 }
 
 /// The temporary path an output is written to before being renamed to `path`.

@@ -75,13 +75,74 @@ fn convert_material(m: &tobj::Material, dir: &Path, out: &mut LoadedMeshes) -> M
     }
 }
 
+/// Reads a text file, without a leading byte-order mark; not UTF-8 is an error naming it.
+fn read_text(path: &Path) -> Result<String> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let text = String::from_utf8(bytes)
+        .map_err(|e| Error::scene(path.display().to_string(), "file", format!("is not UTF-8 text: {e}")))?;
+    Ok(super::strip_bom(&text).to_string())
+}
+
+/// The colour statements of an MTL file, which tobj reads as exactly three numbers.
+const COLOR_KEYS: [&str; 4] = ["Ka", "Kd", "Ks", "Ke"];
+
+/// `text` (an MTL file) with every colour statement given three numbers: one number means
+/// grey, as the format allows; two, or words that are not numbers, are an error naming the
+/// line.
+fn normalise_mtl(text: &str, file: &str) -> Result<String> {
+    let mut out = String::with_capacity(text.len());
+    for (i, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        let key = words.next().unwrap_or("");
+        if COLOR_KEYS.contains(&key) {
+            let numbers: Vec<f32> = words.map(str::parse).collect::<Result<_, _>>().map_err(|_| {
+                Error::scene(
+                    file,
+                    format!("line {}", i + 1),
+                    format!("{key} takes numbers (r g b), not '{}'", line.trim()),
+                )
+            })?;
+            match numbers[..] {
+                [v] => out.push_str(&format!("{key} {v} {v} {v}")),
+                [r, g, b] => out.push_str(&format!("{key} {r} {g} {b}")),
+                _ => {
+                    return Err(Error::scene(
+                        file,
+                        format!("line {}", i + 1),
+                        format!("{key} needs three numbers r g b (or one for grey), found '{}'", line.trim()),
+                    ));
+                }
+            }
+        } else {
+            out.push_str(line);
+        }
+        out.push('\n');
+    }
+    Ok(out)
+}
+
 /// Loads the meshes, materials and textures of an `.obj` file.
 pub fn load_meshes(path: &Path) -> Result<LoadedMeshes> {
-    std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     let file = path.display().to_string();
     let dir = path.parent().unwrap_or(Path::new("."));
-    let (models, materials) = tobj::load_obj(path, &tobj::GPU_LOAD_OPTIONS)
+    let text = read_text(path)?;
+    // tobj hands the material loader a name; our errors about the file it names come back
+    // through here.
+    let mtl_error = std::cell::RefCell::new(None);
+    let load_mtl = |name: &Path| {
+        let mtl = dir.join(name);
+        let text = read_text(&mtl).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+        let text = normalise_mtl(&text, &mtl.display().to_string()).map_err(|e| {
+            mtl_error.replace(Some(e));
+            tobj::LoadError::MaterialParseError
+        })?;
+        tobj::load_mtl_buf(&mut text.as_bytes())
+    };
+    let (models, materials) = tobj::load_obj_buf(&mut text.as_bytes(), &tobj::GPU_LOAD_OPTIONS, load_mtl)
         .map_err(|e| Error::scene(&file, "file", format!("not a readable OBJ file: {e}")))?;
+    if let Some(e) = mtl_error.into_inner() {
+        return Err(e);
+    }
     let mut out = LoadedMeshes::default();
     match materials {
         Ok(ms) => {

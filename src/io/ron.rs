@@ -16,6 +16,7 @@ use super::LoadOptions;
 use crate::error::{Error, Result};
 use crate::material::Material;
 use crate::math::{Mat4, Rgb, UVec2, Vec3A};
+use crate::scene::MAX_RESOLUTION;
 use crate::scene::description::{
     CameraDesc, CameraPlacement, InstanceDesc, LightDesc, RenderDefaults, SceneDescription,
 };
@@ -24,27 +25,51 @@ use crate::scene::shapes;
 
 /// Reads and compiles the scene file at `path`.
 pub fn load(path: &Path, options: &LoadOptions) -> Result<SceneDescription> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = std::fs::read_to_string(path).map_err(|e| match e.kind() {
+        std::io::ErrorKind::InvalidData => {
+            Error::scene(path.display().to_string(), "file", "is not UTF-8 text, so not a RON scene")
+        }
+        _ => Error::io(path, e),
+    })?;
     let base = path.parent().unwrap_or(Path::new("."));
     parse(&text, &path.display().to_string(), base, options)
 }
 
 /// Compiles scene text; `source` names it in messages, `base_dir` resolves relative paths.
 pub fn parse(text: &str, source: &str, base_dir: &Path, options: &LoadOptions) -> Result<SceneDescription> {
+    let text = super::strip_bom(text);
     let file: SceneFile = ::ron::Options::default()
         .with_default_extension(Extensions::IMPLICIT_SOME | Extensions::UNWRAP_VARIANT_NEWTYPES)
         .from_str(text)
         .map_err(|e| {
             let (line, col) = (e.span.start.line, e.span.start.col);
-            let snippet = text.lines().nth(line.saturating_sub(1)).unwrap_or("");
-            let caret = " ".repeat(col.saturating_sub(1));
-            Error::scene(
-                source,
-                format!("{line}:{col}"),
-                format!("{}\n  {line:>4} | {snippet}\n       | {caret}^", e.code),
-            )
+            let (snippet, caret) = excerpt(text.lines().nth(line.saturating_sub(1)).unwrap_or(""), col);
+            let code = shorten(&e.code.to_string(), 300);
+            Error::scene(source, format!("{line}:{col}"), format!("{code}\n  {line:>4} | {snippet}\n       | {caret}^"))
         })?;
     compile(file, source, base_dir, options)
+}
+
+/// Characters of a line shown either side of an error's column.
+const EXCERPT: usize = 60;
+
+/// The part of `line` around column `col` (1-based, in characters) and the spaces that put a
+/// caret under it: a long line (a whole scene on one line) is cut to the neighbourhood.
+fn excerpt(line: &str, col: usize) -> (String, String) {
+    let chars: Vec<char> = line.chars().collect();
+    let at = col.saturating_sub(1).min(chars.len());
+    let (from, to) = (at.saturating_sub(EXCERPT), (at + EXCERPT).min(chars.len()));
+    let (pre, post) = (if from > 0 { "…" } else { "" }, if to < chars.len() { "…" } else { "" });
+    let snippet: String = chars[from..to].iter().collect();
+    (format!("{pre}{snippet}{post}"), " ".repeat(at - from + pre.chars().count()))
+}
+
+/// `text` cut to `max` characters, saying so.
+fn shorten(text: &str, max: usize) -> String {
+    match text.char_indices().nth(max) {
+        Some((i, _)) => format!("{}… ({} characters in all)", &text[..i], text.chars().count()),
+        None => text.to_string(),
+    }
 }
 
 fn v3(a: [f32; 3]) -> Vec3A {
@@ -85,13 +110,18 @@ fn compile(file: SceneFile, source: &str, base_dir: &Path, options: &LoadOptions
     });
     desc.resolution = file.film.resolution.map(|(w, h)| UVec2::new(w, h));
     if let Some(UVec2 { x, y }) = desc.resolution
-        && (x == 0 || y == 0 || x > 32768 || y > 32768)
+        && (x == 0 || y == 0 || x > MAX_RESOLUTION || y > MAX_RESOLUTION)
     {
         return Err(Error::scene(
             source,
             "film.resolution",
-            format!("{x} × {y} is not a usable image size (1 to 32768 per side)"),
+            format!("{x} × {y} is not a usable image size (1 to {MAX_RESOLUTION} per side)"),
         ));
+    }
+    for (name, value) in [("spp", file.render.spp), ("max_depth", file.render.max_depth)] {
+        if value == Some(0) {
+            return Err(Error::scene(source, format!("render.{name}"), "must be at least 1, not 0"));
+        }
     }
     desc.render = RenderDefaults {
         spp: file.render.spp,

@@ -163,6 +163,16 @@ pub enum LightDesc {
 }
 
 impl LightDesc {
+    /// Its label.
+    pub fn name(&self) -> &str {
+        match self {
+            LightDesc::Point { name, .. }
+            | LightDesc::Spot { name, .. }
+            | LightDesc::Directional { name, .. }
+            | LightDesc::Quad { name, .. } => name,
+        }
+    }
+
     /// The light moved by `m` (intensities unchanged).
     pub fn transformed(&self, m: &Mat4) -> LightDesc {
         let dir = |d: &Vec3A| m.transform_vector3a(*d).normalize_or_zero();

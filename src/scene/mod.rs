@@ -11,7 +11,7 @@ pub mod description;
 pub mod format;
 pub mod shapes;
 
-pub use build::{AUTO_CAMERA, BuildOptions, build};
+pub use build::{AUTO_CAMERA, BuildOptions, MAX_RESOLUTION, build};
 pub use description::SceneDescription;
 
 use std::sync::Arc;

@@ -8,6 +8,7 @@ use std::sync::Arc;
 
 use super::description::{LightDesc, MeshDesc};
 use super::format::{GridEmission, GridSpec};
+use crate::limits::{BYTES_PER_LIGHT, BYTES_PER_TRIANGLE, check_memory};
 use crate::math::{Rgb, Vec3A, luminance};
 use crate::sampling::fmix64;
 
@@ -141,9 +142,9 @@ pub fn light_grid(name: &str, g: &GridSpec) -> Result<Vec<LightDesc>, String> {
         return Err("`color_jitter` must be in [0, 1) and `decades` in [0, 30]".into());
     }
     let count = g.rows as u64 * g.cols as u64;
-    if count > 50_000_000 {
-        return Err(format!("{count} lamps is more than the 5·10⁷ myriad supports"));
-    }
+    // Each lamp is a light description now, and two triangles and a light once built.
+    let per_lamp = std::mem::size_of::<LightDesc>() as u64 + 2 * BYTES_PER_TRIANGLE + BYTES_PER_LIGHT;
+    check_memory(count.saturating_mul(per_lamp), format_args!("a grid of {} × {} lamps", g.rows, g.cols))?;
     let cell = (g.extent.0 / g.cols as f32, g.extent.1 / g.rows as f32);
     let side = g.fill.sqrt();
     let lamp = (cell.0 * side, cell.1 * side);

@@ -158,3 +158,58 @@ fn info_reports_counts() {
     assert!(text.contains("81 (81 quad)"), "{text}");
     assert!(text.contains("B/triangle"), "{text}");
 }
+
+/// Runs the binary with `args` in a folder holding the good scene, expecting a clear error
+/// mentioning every one of `needles` and no file besides the scene.
+fn expect_usage_error(args: &[&str], needles: &[&str]) {
+    let (dir, _) = scene_file(GOOD);
+    let out = myriad(args, dir.path());
+    let err = stderr(&out);
+    assert!(!out.status.success(), "{args:?} succeeded: {err}");
+    assert!(!err.contains("panicked") && !err.contains(myriad::guard::BUG_REPORT), "{args:?}: {err}");
+    for n in needles {
+        assert!(err.contains(n), "{args:?}: error lacks '{n}':\n{err}");
+    }
+    let files: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(files, vec![std::ffi::OsString::from("scene.ron")], "{args:?}: files left behind");
+}
+
+#[test]
+fn absurd_options_are_refused_with_the_reason() {
+    expect_usage_error(&["render", "scene.ron", "--time", "1e300"], &["1e300", "longer than"]);
+    expect_usage_error(&["render", "scene.ron", "--time", "NaN"], &["positive"]);
+    expect_usage_error(&["--threads", "100000", "render", "scene.ron"], &["100000", "1..=1024"]);
+    expect_usage_error(&["render", "scene.ron", "--exposure", "NaN"], &["exposure"]);
+    expect_usage_error(&["render", "scene.ron", "-o", "x.png"], &["x.png", ".exr"]);
+    expect_usage_error(&["render", "scene.ron", "-o", "x.exr", "--png", "./x.exr"], &["--png", "overwrite"]);
+    expect_usage_error(
+        &["--max-memory", "1", "render", "scene.ron", "--resolution", "16384x16384"],
+        &["16384 × 16384", "memory", "--max-memory"],
+    );
+    expect_usage_error(&["--max-memory", "0", "info", "scene.ron"], &["gigabytes"]);
+}
+
+#[test]
+fn compare_on_a_broken_scene_leaves_no_folder() {
+    let text = GOOD.replace("lights: [", "lights: [ Point(position: (0, 1.5, 0), intensity: (1e38, 1e38, 1e38)),");
+    let (dir, _) = scene_file(&text);
+    let out = myriad(&["compare", "scene.ron", "--spp", "1", "--out-dir", "cmp"], dir.path());
+    let err = stderr(&out);
+    assert!(!out.status.success() && err.contains("light 0") && !err.contains("panicked"), "{err}");
+    assert!(!dir.path().join("cmp").exists(), "compare left a folder");
+}
+
+#[test]
+fn diff_of_a_broken_exr_is_an_error() {
+    let (dir, _) = scene_file(GOOD);
+    assert!(myriad(&["render", "scene.ron", "-o", "a.exr", "--spp", "1", "--no-png"], dir.path()).status.success());
+    let mut bytes = std::fs::read(dir.path().join("a.exr")).unwrap();
+    // Zero a byte of the data window: the header then declares a different image size.
+    let at = bytes.windows(10).position(|w| w == b"dataWindow").unwrap() + 20;
+    bytes[at] = 0xff;
+    bytes[at + 1] = 0x7f;
+    std::fs::write(dir.path().join("b.exr"), &bytes).unwrap();
+    let out = myriad(&["diff", "b.exr", "a.exr"], dir.path());
+    let err = stderr(&out);
+    assert!(!out.status.success() && err.contains("b.exr") && !err.contains("panicked"), "{err}");
+}

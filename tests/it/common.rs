@@ -9,6 +9,8 @@ use myriad::math::{Mat4, Rgb, UVec2, Vec3A};
 use myriad::sampling::fmix64;
 use myriad::scene::description::{CameraDesc, CameraPlacement, InstanceDesc, LightDesc, MeshDesc, SceneDescription};
 use myriad::scene::{BuildOptions, Scene, build};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// Significance level of every statistical test, before correction.
@@ -283,6 +285,47 @@ pub fn pick_chi_square(
     let mut expected: Vec<f64> = pmfs.iter().map(|p| p * draws as f64).collect();
     expected.push((1.0 - pmfs.iter().sum::<f64>()).max(0.0) * draws as f64);
     chi_square(&counts, &expected)
+}
+
+/// A Blender export in `tests/data/blender/` (its README says what each holds).
+pub fn blender(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/blender").join(name)
+}
+
+/// One of the Cornell boxes in `tests/data/cornell/`, by extension.
+pub fn cornell(ext: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/cornell/cornell").with_extension(ext)
+}
+
+/// Loads and builds a scene file as `myriad render` does.
+pub fn load(path: &Path, resolution: Option<UVec2>, camera: Option<&str>) -> myriad::Result<Scene> {
+    let options = myriad::commands::SceneOptions {
+        load: Default::default(),
+        build: BuildOptions { resolution, camera: camera.map(String::from) },
+    };
+    myriad::commands::load_scene(Some(path), &options).map(|l| l.scene)
+}
+
+/// The Cornell glTF as JSON, for tests to break.
+pub fn cornell_json() -> Value {
+    serde_json::from_str(&std::fs::read_to_string(cornell("gltf")).unwrap()).unwrap()
+}
+
+/// Writes `bytes` as `name` in `dir` and loads it, expecting an error: its message.
+pub fn load_error(dir: &Path, name: &str, bytes: &[u8]) -> String {
+    let path = dir.join(name);
+    std::fs::write(&path, bytes).unwrap();
+    match load(&path, Some(UVec2::new(8, 6)), None) {
+        Ok(_) => panic!("{name} loaded"),
+        Err(e) => e.to_string(),
+    }
+}
+
+/// Fails unless `message` contains every one of `parts`.
+pub fn assert_mentions(message: &str, parts: &[&str]) {
+    for p in parts {
+        assert!(message.contains(p), "'{message}' does not mention '{p}'");
+    }
 }
 
 #[cfg(test)]

@@ -2,32 +2,13 @@
 //! render what Cycles renders; one Cornell box written as RON, OBJ/MTL and glTF renders alike;
 //! broken files are clear errors naming the file and the element.
 
+use crate::common::{assert_mentions, blender, cornell, cornell_json, load, load_error};
 use crate::render::{compare_films, render_with};
-use myriad::commands::{SceneOptions, load_scene};
-use myriad::io::LoadOptions;
 use myriad::light_sampler::LightSamplerKind;
 use myriad::math::UVec2;
-use myriad::scene::{AUTO_CAMERA, BuildOptions, Scene};
-use serde_json::{Value, json};
+use myriad::scene::{AUTO_CAMERA, Scene};
+use serde_json::json;
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
-
-/// A Blender export in `tests/data/blender/` (its README says what each holds).
-fn blender(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/blender").join(name)
-}
-
-fn cornell(ext: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/cornell/cornell").with_extension(ext)
-}
-
-fn load(path: &Path, resolution: Option<UVec2>, camera: Option<&str>) -> myriad::Result<Scene> {
-    let options = SceneOptions {
-        load: LoadOptions::default(),
-        build: BuildOptions { resolution, camera: camera.map(String::from) },
-    };
-    load_scene(Some(path), &options).map(|l| l.scene)
-}
 
 fn light_kinds(scene: &Scene) -> BTreeMap<&'static str, usize> {
     let mut kinds = BTreeMap::new();
@@ -137,27 +118,6 @@ fn one_cornell_box_as_ron_obj_and_gltf_renders_alike() {
     assert!(err.contains("cornell.obj") && err.contains("--camera auto"), "{err}");
 }
 
-/// The Cornell glTF as JSON, to break in the tests below.
-fn cornell_json() -> Value {
-    serde_json::from_str(&std::fs::read_to_string(cornell("gltf")).unwrap()).unwrap()
-}
-
-/// Writes `doc` as a `.gltf` in `dir` and loads it; the error message.
-fn load_error(dir: &Path, name: &str, bytes: &[u8]) -> String {
-    let path = dir.join(name);
-    std::fs::write(&path, bytes).unwrap();
-    match load(&path, Some(UVec2::new(8, 6)), None) {
-        Ok(_) => panic!("{name} loaded"),
-        Err(e) => e.to_string(),
-    }
-}
-
-fn assert_mentions(message: &str, parts: &[&str]) {
-    for p in parts {
-        assert!(message.contains(p), "'{message}' does not mention '{p}'");
-    }
-}
-
 #[test]
 fn broken_gltf_files_are_clear_errors() {
     let dir = tempfile::tempdir().unwrap();
@@ -180,7 +140,7 @@ fn broken_gltf_files_are_clear_errors() {
     let mut doc = cornell_json();
     doc["bufferViews"][1]["byteLength"] = json!(12);
     let e = load_error(dir.path(), "view.gltf", doc.to_string().as_bytes());
-    assert_mentions(&e, &["view.gltf", "accessor 1"]);
+    assert_mentions(&e, &["view.gltf", "accessors[1]", "do not fit in buffer view 1"]);
 
     let mut doc = cornell_json();
     doc["meshes"][2]["primitives"][0]["material"] = json!(99);

@@ -1,5 +1,6 @@
 //! Integration tests, in one binary to keep linking cheap on 2-core CI.
 
+mod bad_input;
 mod bsdfs;
 mod cli;
 mod common;

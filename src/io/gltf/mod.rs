@@ -8,10 +8,13 @@
 //! `punctual_scale`, 1/683 by default: Blender writes W·683/(4π) cd and W/m²·683 lx).
 //!
 //! Each primitive becomes one mesh, stored once however many nodes use it (instancing).
-//! Every accessor is checked (type, size, range) before it is read, so a broken file is an
-//! error naming the mesh, primitive and accessor, never a panic inside the reader. Images are
+//! The document's structure is checked before anything walks it (`check.rs`: indices, sizes,
+//! strides, the node forest), and every accessor's type and shape before it is read, so a
+//! broken file is an error naming the element, never a panic inside the reader. Images are
 //! decoded one by one: a missing or unreadable one is a warning and the materials that use it
 //! fall back to their factors.
+
+mod check;
 
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -37,8 +40,16 @@ const SUPPORTED: [&str; 4] =
 pub fn load(path: &Path, options: &LoadOptions) -> Result<SceneDescription> {
     let file = path.display().to_string();
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| parse_error(&file, &bytes, e))?;
+    // A JSON glTF saved with a byte-order mark is still JSON.
+    let text = bytes.strip_prefix("\u{feff}".as_bytes()).unwrap_or(&bytes);
+    let raw = gltf::Gltf::from_slice_without_validation(text).map_err(|e| parse_error(&file, text, e))?;
     let base = path.parent();
+    check::structure(&file, raw.document.as_json())?;
+    check::external_files(&file, raw.document.as_json(), base)?;
+    let gltf = gltf::Gltf {
+        document: gltf::Document::from_json(raw.document.into_json()).map_err(|e| parse_error(&file, text, e))?,
+        blob: raw.blob,
+    };
     let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob.clone()).map_err(|e| buffer_error(&file, e))?;
     let mut loader = Loader {
         file: &file,
@@ -358,13 +369,10 @@ impl Loader<'_> {
                 .or_else(|| doc.scenes().next())
                 .ok_or_else(|| self.err("scenes", "the file holds no scene"))?,
         };
-        let mut stack: Vec<(gltf::Node, Mat4, usize)> = scene.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+        // The hierarchy is a forest (`check.rs`): the walk visits each node once.
+        let mut stack: Vec<(gltf::Node, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
         let (mut range_warned, mut ortho) = (false, Vec::new());
-        let limit = doc.nodes().len();
-        while let Some((node, parent, depth)) = stack.pop() {
-            if depth > limit {
-                return Err(self.err(format!("nodes[{}]", node.index()), "the node hierarchy has a cycle"));
-            }
+        while let Some((node, parent)) = stack.pop() {
             let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
             let name = node.name().map_or_else(|| format!("node {}", node.index()), str::to_string);
             if let Some(mesh) = node.mesh() {
@@ -406,7 +414,7 @@ impl Loader<'_> {
                     }
                 });
             }
-            stack.extend(node.children().map(|c| (c, world, depth + 1)));
+            stack.extend(node.children().map(|c| (c, world)));
         }
         if range_warned {
             self.warn("punctual light `range` is ignored: light falls off with the inverse square of distance".into());

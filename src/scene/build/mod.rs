@@ -1,0 +1,273 @@
+//! `SceneDescription` → `Scene`, in steps: validate the description (`validate.rs`), choose
+//! the camera and the image size, check that the result fits the memory limit, place the
+//! meshes and make their emitters lights (`place.rs`), add the other lights (`lights.rs`),
+//! build the BVH, place the camera.
+//!
+//! Every check names the file and the object, so that a bad scene is an error a user can act
+//! on, never a panic or a silently black image.
+
+mod lights;
+mod place;
+mod validate;
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use self::place::{Placement, Placer};
+use super::description::{CameraDesc, CameraPlacement, LightDesc, SceneDescription};
+use super::{Scene, SceneStats};
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+use crate::geometry::GeometryBuilder;
+use crate::light::{Light, PointLight, SpotLight};
+use crate::limits::{BYTES_PER_INSTANCE, BYTES_PER_LIGHT, BYTES_PER_PIXEL, BYTES_PER_TRIANGLE, check_memory};
+use crate::material::Material;
+use crate::math::{Rgb, UVec2, Vec3A};
+
+/// Choices made when building, usually from the command line.
+#[derive(Clone, Debug, Default)]
+pub struct BuildOptions {
+    /// Output size; default: the scene's, else 640 wide at the camera's aspect ratio.
+    pub resolution: Option<UVec2>,
+    /// Camera to use, by name; default: the first.
+    pub camera: Option<String>,
+}
+
+/// Width used when neither the command line nor the scene gives a resolution.
+const DEFAULT_WIDTH: u32 = 640;
+
+/// Largest image side.
+pub const MAX_RESOLUTION: u32 = 32768;
+
+/// The camera the options ask for (`None`: `auto`, placed once the bounds are known).
+fn choose_camera<'a>(desc: &'a SceneDescription, opts: &BuildOptions) -> Result<Option<&'a CameraDesc>> {
+    let file = desc.source.as_str();
+    match opts.camera.as_deref() {
+        Some(AUTO_CAMERA) => Ok(None),
+        Some(name) => desc.cameras.iter().find(|c| c.name == name).map(Some).ok_or_else(|| {
+            let names: Vec<&str> = desc.cameras.iter().map(|c| c.name.as_str()).collect();
+            Error::scene(
+                file,
+                "cameras",
+                format!("no camera named '{name}'; the scene has {names:?} (or pass --camera auto)"),
+            )
+        }),
+        None => desc.cameras.first().map(Some).ok_or_else(|| {
+            Error::scene(
+                file,
+                "cameras",
+                "the scene has no camera; add one (in Blender: a camera object, exported with 'Cameras' on), \
+                 or pass --camera auto to frame the whole scene",
+            )
+        }),
+    }
+}
+
+/// The image size: the options', else the scene's, else 640 wide at the camera's aspect ratio.
+fn resolution(desc: &SceneDescription, opts: &BuildOptions, camera: Option<&CameraDesc>) -> Result<UVec2> {
+    if let Some(r) = opts.resolution.or(desc.resolution) {
+        return Ok(r);
+    }
+    let Some((name, aspect)) = camera.and_then(|c| Some((&c.name, c.aspect_ratio?))) else {
+        return Ok(UVec2::new(DEFAULT_WIDTH, DEFAULT_WIDTH * 3 / 4));
+    };
+    let height = (DEFAULT_WIDTH as f64 / aspect as f64).round();
+    if !(1.0..=MAX_RESOLUTION as f64).contains(&height) {
+        return Err(Error::scene(
+            &desc.source,
+            format!("camera '{name}'"),
+            format!(
+                "has aspect ratio {aspect:e}, which at {DEFAULT_WIDTH} pixels wide is {height:.1e} pixels tall \
+                 (1 to {MAX_RESOLUTION} work); pass --resolution WIDTHxHEIGHT"
+            ),
+        ));
+    }
+    Ok(UVec2::new(DEFAULT_WIDTH, height as u32))
+}
+
+/// How each mesh is placed: shared (stored once, instanced) when it is used more than once
+/// and does not emit (each emitting triangle is a light of its own, in world space).
+fn placements(desc: &SceneDescription) -> Vec<(Vec<Placement<'_>>, bool)> {
+    let mut per_mesh: Vec<Vec<Placement>> = vec![Vec::new(); desc.meshes.len()];
+    for inst in &desc.instances {
+        per_mesh[inst.mesh as usize].push((inst.transform, &inst.name));
+    }
+    per_mesh
+        .into_iter()
+        .zip(&desc.meshes)
+        .map(|(p, mesh)| {
+            let shared = p.len() > 1 && !desc.materials[mesh.material as usize].is_emissive();
+            (p, shared)
+        })
+        .collect()
+}
+
+/// An error when the built scene and its image would not fit the memory limit.
+fn check_size(desc: &SceneDescription, placements: &[(Vec<Placement>, bool)], resolution: UVec2) -> Result<()> {
+    let (mut triangles, mut instances, mut lights) = (0u64, 0u64, desc.lights.len() as u64);
+    for ((p, shared), mesh) in placements.iter().zip(&desc.meshes) {
+        let n = mesh.triangles.len() as u64;
+        if *shared {
+            (triangles, instances) = (triangles + n, instances + p.len() as u64);
+        } else {
+            triangles = triangles.saturating_add(n.saturating_mul(p.len() as u64));
+            if desc.materials[mesh.material as usize].is_emissive() {
+                lights = lights.saturating_add(n.saturating_mul(p.len() as u64));
+            }
+        }
+    }
+    let pixels = resolution.x as u64 * resolution.y as u64;
+    let bytes = [
+        (triangles, BYTES_PER_TRIANGLE),
+        (instances, BYTES_PER_INSTANCE),
+        (lights, BYTES_PER_LIGHT),
+        (pixels, BYTES_PER_PIXEL),
+    ]
+    .iter()
+    .fold(0u64, |sum, &(n, b)| sum.saturating_add(n.saturating_mul(b)));
+    check_memory(
+        bytes,
+        format_args!(
+            "this scene ({triangles} triangles, {lights} lights, a {} × {} image)",
+            resolution.x, resolution.y
+        ),
+    )
+    .map_err(|m| Error::scene(&desc.source, "scene", m))
+}
+
+/// Validates `desc` and builds the scene (BVH built in the current rayon pool).
+pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
+    let start = Instant::now();
+    let file = desc.source.as_str();
+    validate::description(&desc)?;
+    let cam_desc = choose_camera(&desc, opts)?;
+    let resolution = resolution(&desc, opts, cam_desc)?;
+    let placements = placements(&desc);
+    check_size(&desc, &placements, resolution)?;
+
+    let images = Arc::new(desc.images.clone());
+    let mut placer = Placer {
+        desc: &desc,
+        images: &images,
+        geo: GeometryBuilder::new(),
+        lights: Vec::new(),
+        stats: SceneStats::default(),
+        degenerate_emitters: 0,
+    };
+    for (mesh, (p, shared)) in desc.meshes.iter().zip(&placements) {
+        if *shared {
+            placer.place_shared(mesh, p)?;
+        } else {
+            for &placement in p {
+                placer.place_flat(mesh, placement)?;
+            }
+        }
+    }
+    let Placer { mut geo, mut lights, mut stats, degenerate_emitters, .. } = placer;
+
+    // Lights that are not meshes; quad lights are also two triangles that camera and BSDF
+    // rays can hit, with a black material of their own.
+    let mut materials = desc.materials.clone();
+    let mut emitter_material = None;
+    let listed = lights.len();
+    for (i, l) in desc.lights.iter().enumerate() {
+        let light = lights::light(file, i, l)?;
+        if let Light::Quad(q) = &light {
+            let mat = *emitter_material.get_or_insert_with(|| {
+                materials.push(Material { name: "<light>".into(), ..Material::diffuse("", Rgb::ZERO) });
+                (materials.len() - 1) as u32
+            });
+            for t in q.triangles() {
+                geo.push_triangle(t, [0, 1, 2], None, mat, lights.len() as u32, false);
+            }
+            stats.emissive_triangles += 2;
+        }
+        lights.push(light);
+    }
+
+    let mut warnings = desc.warnings.clone();
+    if degenerate_emitters > 0 {
+        warnings.push(format!("{degenerate_emitters} emissive triangles have zero area and do not emit"));
+    }
+
+    // Bounds of everything, for directional lights and reports.
+    let (mut lo, mut hi) = (Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN));
+    let (geometry, _) = geo.build();
+    for (v, _) in geometry.world_triangles() {
+        for p in v {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+    }
+    for l in &lights {
+        if let Light::Point(PointLight { position, .. }) | Light::Spot(SpotLight { position, .. }) = l {
+            lo = lo.min(*position);
+            hi = hi.max(*position);
+        }
+    }
+    let (center, radius) =
+        if lo.x <= hi.x { (0.5 * (lo + hi), (0.5 * (hi - lo).length()).max(1e-3)) } else { (Vec3A::ZERO, 1.0) };
+    // A directional light's power is its irradiance over the scene's disc.
+    for (i, l) in desc.lights.iter().enumerate() {
+        if let LightDesc::Directional { name, .. } = l {
+            lights::check_power(file, &format!("light {i} '{name}'"), &lights[listed + i], radius)?;
+        }
+    }
+
+    let (camera, camera_name) = match cam_desc {
+        Some(c) => (scene_camera(file, c, resolution)?, c.name.clone()),
+        None => (auto_camera(file, center, radius, resolution)?, AUTO_CAMERA.to_string()),
+    };
+
+    let accel = geometry.accel.stats();
+    stats.meshes = desc.meshes.len();
+    stats.cameras = desc.cameras.iter().map(|c| c.name.clone()).collect();
+    stats.triangles = geometry.triangle_count();
+    stats.stored_triangles = geometry.stored_triangle_count();
+    stats.bvh_build_time = accel.build_time;
+    stats.geometry_bytes = geometry.memory_bytes();
+    lights.shrink_to_fit();
+    stats.light_bytes = lights.capacity() * std::mem::size_of::<Light>();
+    stats.build_time = start.elapsed();
+    Ok(Scene {
+        source: desc.source.clone(),
+        camera,
+        camera_name,
+        geometry,
+        materials,
+        images,
+        lights,
+        center,
+        radius,
+        render: desc.render,
+        stats,
+        warnings,
+    })
+}
+
+/// The `--camera` value that frames the whole scene instead of using one of its cameras.
+pub const AUTO_CAMERA: &str = "auto";
+
+/// The field of view of the `auto` camera, in degrees.
+const AUTO_YFOV_DEG: f32 = 40.0;
+
+/// A scene camera at the given resolution, or an error naming it and saying what is wrong.
+fn scene_camera(file: &str, c: &CameraDesc, resolution: UVec2) -> Result<Camera> {
+    match c.placement {
+        CameraPlacement::LookAt { eye, target, up } => Camera::look_at(eye, target, up, c.yfov, resolution),
+        CameraPlacement::Matrix(m) => Camera::from_matrix(&m, c.yfov, resolution),
+    }
+    .map_err(|m| Error::scene(file, format!("camera '{}'", c.name), format!("cannot be used: {m}")))
+}
+
+/// A camera on +Z looking down −Z at the centre of the scene's bounding sphere, slightly from
+/// above, far enough back that the whole sphere fits the narrower field of view.
+fn auto_camera(file: &str, center: Vec3A, radius: f32, resolution: UVec2) -> Result<Camera> {
+    let yfov = AUTO_YFOV_DEG.to_radians();
+    let aspect = resolution.x as f32 / resolution.y as f32;
+    let half = (0.5 * yfov).tan().min((0.5 * yfov).tan() * aspect).atan();
+    let distance = radius / half.sin();
+    let dir = Vec3A::new(0.0, 0.25, 1.0).normalize();
+    Camera::look_at(center + distance * dir, center, Vec3A::Y, yfov, resolution)
+        .map_err(|m| Error::scene(file, "--camera auto", format!("cannot frame the scene: {m}")))
+}

@@ -1,0 +1,161 @@
+//! Meshes into the world: shared meshes stored once and instanced, the rest flattened into
+//! world space with their emissive triangles made lights.
+
+use std::sync::Arc;
+
+use super::validate::placeable;
+use crate::error::{Error, Result};
+use crate::geometry::{Attributes, GeometryBuilder, NO_LIGHT};
+use crate::light::{AreaEmission, Light, QuadLight, TriangleLight};
+use crate::limits::{MAX_COORDINATE, MAX_POWER};
+use crate::material::Image;
+use crate::math::{Mat3, Mat4, Vec3A};
+use crate::scene::SceneStats;
+use crate::scene::description::{MeshDesc, SceneDescription};
+
+/// One placement of a mesh: its transform and the instance's name (for messages).
+pub(super) type Placement<'a> = (Mat4, &'a str);
+
+/// What placing meshes builds up.
+pub(super) struct Placer<'a> {
+    pub desc: &'a SceneDescription,
+    pub images: &'a Arc<Vec<Image>>,
+    pub geo: GeometryBuilder,
+    pub lights: Vec<Light>,
+    pub stats: SceneStats,
+    pub degenerate_emitters: usize,
+}
+
+impl Placer<'_> {
+    fn err(&self, mesh: &MeshDesc, instance: &str, message: String) -> Error {
+        Error::scene(&self.desc.source, format!("instance '{instance}' of mesh '{}'", mesh.name), message)
+    }
+
+    /// An error when a placed vertex lands outside what myriad can hold.
+    fn check_placed(&self, mesh: &MeshDesc, instance: &str, p: Vec3A) -> Result<()> {
+        if placeable(p) {
+            return Ok(());
+        }
+        Err(self.err(
+            mesh,
+            instance,
+            format!(
+                "puts a vertex at {p}, which is not finite or lies beyond ±{MAX_COORDINATE} m; scale the scene down"
+            ),
+        ))
+    }
+
+    /// Pushes a mesh's vertex attributes (object space, or transformed by `m`).
+    fn attributes(&mut self, mesh: &MeshDesc, m: Option<Mat4>) -> Option<Attributes> {
+        if mesh.normals.is_none() && mesh.uvs.is_none() {
+            return None;
+        }
+        let normals: Option<Vec<Vec3A>> = mesh.normals.as_ref().map(|ns| match m {
+            Some(m) => {
+                let nm = Mat3::from_mat4(m).inverse().transpose();
+                ns.iter().map(|&n| (nm * n).normalize_or_zero()).collect()
+            }
+            None => ns.clone(),
+        });
+        let base = self.geo.push_vertices(normals.as_deref(), mesh.uvs.as_deref(), mesh.positions.len());
+        Some(Attributes { base, smooth: mesh.normals.is_some(), has_uv: mesh.uvs.is_some() })
+    }
+
+    /// Adds a shared mesh once, in object space, and each of its placements.
+    pub fn place_shared(&mut self, mesh: &MeshDesc, placements: &[Placement]) -> Result<()> {
+        // Each placement's box corners bound where its vertices land.
+        let (lo, hi) = mesh
+            .positions
+            .iter()
+            .fold((Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN)), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        for &(m, name) in placements {
+            for k in 0..8 {
+                let corner = Vec3A::select(glam::BVec3A::new(k & 1 != 0, k & 2 != 0, k & 4 != 0), hi, lo);
+                self.check_placed(mesh, name, m.transform_point3a(corner))?;
+            }
+        }
+        let masked = self.desc.materials[mesh.material as usize].alpha_cutoff.is_some();
+        let attr = self.attributes(mesh, None);
+        let block = self.geo.add_shared_mesh(&mesh.positions, &mesh.triangles, attr, mesh.material, masked);
+        for &(m, _) in placements {
+            self.geo.add_instance(block, m);
+        }
+        self.stats.instances += placements.len();
+        Ok(())
+    }
+
+    /// Adds every triangle of one placement to the flattened block, creating lights for
+    /// emissive ones.
+    pub fn place_flat(&mut self, mesh: &MeshDesc, (m, name): Placement) -> Result<()> {
+        let material = &self.desc.materials[mesh.material as usize];
+        // A mirroring transform reverses the winding; swap two corners to keep the front
+        // side (glTF: the front of a negative-determinant node is its clockwise side).
+        let flip = Mat3::from_mat4(m).determinant() < 0.0;
+        let positions: Vec<Vec3A> = mesh.positions.iter().map(|&p| m.transform_point3a(p)).collect();
+        if let Some(&p) = positions.iter().find(|p| !placeable(**p)) {
+            return self.check_placed(mesh, name, p);
+        }
+        let attr = self.attributes(mesh, Some(m));
+        let emission = AreaEmission { radiance: material.emission, two_sided: material.double_sided };
+        let (emissive, masked) = (material.is_emissive(), material.alpha_cutoff.is_some());
+        let corners = |t: [u32; 3]| if flip { [t[0], t[2], t[1]] } else { t };
+        self.stats.instances += 1;
+        if emissive && mesh.quads {
+            for pair in mesh.triangles.chunks_exact(2) {
+                let [a, b, _] = pair[0].map(|i| positions[i as usize]);
+                let d = positions[pair[1][2] as usize];
+                let (e1, e2) = if flip { (d - a, b - a) } else { (b - a, d - a) };
+                let id = match QuadLight::new(a, e1, e2, emission) {
+                    Some(q) => self.add_light(mesh, name, Light::Quad(q), 2)?,
+                    None => {
+                        self.degenerate_emitters += 2;
+                        NO_LIGHT
+                    }
+                };
+                for &t in pair {
+                    let t = corners(t);
+                    self.geo.push_triangle(t.map(|i| positions[i as usize]), t, attr, mesh.material, id, masked);
+                }
+            }
+            return Ok(());
+        }
+        for &t in &mesh.triangles {
+            let t = corners(t);
+            let mut id = NO_LIGHT;
+            if emissive {
+                let light = TriangleLight::new(t.map(|i| positions[i as usize]), emission).map(|l| {
+                    match (&material.emission_texture, &mesh.uvs) {
+                        (Some(tex), Some(uvs)) => l.with_texture(*tex, t.map(|i| uvs[i as usize]), self.images.clone()),
+                        _ => l,
+                    }
+                });
+                match light {
+                    Some(l) => id = self.add_light(mesh, name, Light::Triangle(l), 1)?,
+                    None => self.degenerate_emitters += 1,
+                }
+            }
+            self.geo.push_triangle(t.map(|i| positions[i as usize]), t, attr, mesh.material, id, masked);
+        }
+        Ok(())
+    }
+
+    /// Adds an emitter of `triangles` triangles; an error when its power is beyond what the
+    /// samplers' arithmetic holds.
+    fn add_light(&mut self, mesh: &MeshDesc, instance: &str, light: Light, triangles: usize) -> Result<u32> {
+        let power = light.power(0.0);
+        if !(power <= MAX_POWER) {
+            let material = &self.desc.materials[mesh.material as usize];
+            return Err(self.err(
+                mesh,
+                instance,
+                format!(
+                    "emits {power:e} W from one triangle (material '{}', emission {}), beyond myriad's limit of {MAX_POWER:e} W",
+                    material.name, material.emission
+                ),
+            ));
+        }
+        self.lights.push(light);
+        self.stats.emissive_triangles += triangles;
+        Ok((self.lights.len() - 1) as u32)
+    }
+}
