@@ -44,6 +44,9 @@ pub enum Error {
     /// An option has a value that cannot work.
     #[error("{0}")]
     Usage(String),
+    /// The user stopped the work (Ctrl-C, SIGTERM) before anything was written.
+    #[error("interrupted: nothing was written, and earlier outputs are as they were")]
+    Interrupted,
 }
 
 impl Error {

@@ -220,7 +220,9 @@ fn parse_gigabytes(s: &str) -> Result<u64, String> {
     myriad::limits::parse_gb(s).ok_or_else(|| format!("'{s}' is not a positive number of gigabytes"))
 }
 
-fn run(cli: Cli) -> myriad::Result<()> {
+/// Runs the command; the exit status (130 for a render the user stopped, whose partial
+/// result was written).
+fn run(cli: Cli) -> myriad::Result<ExitCode> {
     if let Some(bytes) = cli.max_memory {
         myriad::limits::set_memory_limit(bytes);
     }
@@ -255,7 +257,12 @@ fn run(cli: Cli) -> myriad::Result<()> {
                 progress: !a.quiet,
                 load: a.load.options(),
             };
-            say(commands::render::render(&opts)?);
+            let report = commands::render::render(&opts)?;
+            let stopped = report.output.stats.stopped != myriad::interrupt::Stop::No;
+            say(report);
+            if stopped {
+                return Ok(ExitCode::from(myriad::interrupt::EXIT_STATUS));
+            }
         }
         Command::Compare(a) => {
             let out_dir = a.out_dir.unwrap_or_else(|| {
@@ -304,7 +311,7 @@ fn run(cli: Cli) -> myriad::Result<()> {
             say(info(scene.as_deref(), &options)?);
         }
     }
-    Ok(())
+    Ok(ExitCode::SUCCESS)
 }
 
 /// Prints to stdout; a closed pipe (`myriad … | head`) ends the output quietly instead of
@@ -314,11 +321,24 @@ fn say(text: impl std::fmt::Display) {
     let _ = writeln!(std::io::stdout(), "{text}");
 }
 
+/// Prints to stderr; a closed stderr is no reason to panic.
+fn tell(text: impl std::fmt::Display) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr(), "{text}");
+}
+
 fn main() -> ExitCode {
+    if let Err(e) = myriad::interrupt::install() {
+        tell(format!("warning: Ctrl-C will stop myriad without cleaning up ({e})"));
+    }
     match run(Cli::parse()) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => code,
+        Err(e @ myriad::Error::Interrupted) => {
+            tell(e);
+            ExitCode::from(myriad::interrupt::EXIT_STATUS)
+        }
         Err(e) => {
-            eprintln!("error: {e}");
+            tell(format!("error: {e}"));
             ExitCode::FAILURE
         }
     }

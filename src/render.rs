@@ -13,6 +13,7 @@ use rayon::prelude::*;
 
 use crate::film::{AovSet, Film};
 use crate::integrator::{RayCounters, path};
+use crate::interrupt::{self, Stop};
 use crate::light_sampler::LightStrategy;
 use crate::math::UVec2;
 use crate::sampling::{Dim, SampleStream};
@@ -20,6 +21,10 @@ use crate::scene::Scene;
 
 /// Rows per work item: small enough to balance 2–64 threads on a 240-row image.
 const ROWS_PER_BAND: u32 = 2;
+
+/// Longest a fixed-spp pass should take, so that a Ctrl-C (which lets the pass under way
+/// finish) is answered soon.
+const MAX_PASS: Duration = Duration::from_secs(1);
 
 /// How long to render.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -44,7 +49,7 @@ pub struct RenderSettings {
 }
 
 /// Counts and timings of a render.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 pub struct RenderStats {
     /// Wall time of the sampling loop (scene loading and builds excluded).
     pub elapsed: Duration,
@@ -56,6 +61,22 @@ pub struct RenderStats {
     pub rays: RayCounters,
     /// Samples whose value was not finite and were counted as black (a bug if ever > 0).
     pub non_finite_samples: u64,
+    /// Whether the user stopped the render ([`Stop::AfterPass`]: the film holds the passes
+    /// finished; [`Stop::Now`]: it is incomplete and must not be written).
+    pub stopped: Stop,
+}
+
+impl Default for RenderStats {
+    fn default() -> Self {
+        Self {
+            elapsed: Duration::ZERO,
+            spp: 0,
+            samples: 0,
+            rays: RayCounters::default(),
+            non_finite_samples: 0,
+            stopped: Stop::No,
+        }
+    }
 }
 
 impl RenderStats {
@@ -96,6 +117,9 @@ fn render_pass(
         .map(|(row0, pixels, mut aovs)| {
             let mut counters = RayCounters::default();
             let mut bad = 0u64;
+            if interrupt::requested() == Stop::Now {
+                return (counters, bad);
+            }
             for (k, px) in pixels.iter_mut().enumerate() {
                 let index = row0 as usize * size.x as usize + k;
                 let pixel = UVec2::new(index as u32 % size.x, index as u32 / size.x);
@@ -127,10 +151,35 @@ fn render_pass(
     })
 }
 
+/// The size of the next pass, or `None` when the budget is spent. `done` samples per pixel
+/// are rendered, the last pass took `per_spp` per sample (unknown before the first), and
+/// `elapsed` has passed since the render began.
+///
+/// A fixed-spp render reaches every power of two (convergence plots see the image there),
+/// in passes of at most [`MAX_PASS`]; an equal-time one runs passes of about 1/20 of its
+/// budget and stops when the next would overshoot by more than half a pass.
+fn next_pass(budget: Budget, done: u32, per_spp: Option<Duration>, elapsed: Duration) -> Option<u32> {
+    let Some(per_spp) = per_spp.filter(|_| done > 0) else { return Some(1) };
+    let per_spp = per_spp.as_secs_f64().max(1e-9);
+    match budget {
+        Budget::Spp(n) if done >= n => None,
+        Budget::Spp(n) => {
+            let boundary = (done as u64 + 1).next_power_of_two().min(n as u64) as u32;
+            let cap = (MAX_PASS.as_secs_f64() / per_spp).max(1.0);
+            Some((boundary - done).min(cap as u32).max(1))
+        }
+        Budget::Time(limit) => {
+            let fits = limit.saturating_sub(elapsed).as_secs_f64() / per_spp;
+            let chunk = (limit.as_secs_f64() / 20.0 / per_spp).max(1.0);
+            (fits >= 0.5).then(|| fits.min(chunk).round().clamp(1.0, (u32::MAX - done) as f64) as u32)
+        }
+    }
+}
+
 /// Renders `scene` with `strategy` in the current rayon pool. `progress` (if any) advances by
-/// one per camera sample; its length is set for `Budget::Spp`. `on_pass` sees the film after
-/// every pass: at 1, 2, 4, … spp for a fixed-spp render, every ~1/20 of the budget for an
-/// equal-time one.
+/// one per camera sample (fixed spp) or per millisecond (equal time). `on_pass` sees the film
+/// after every pass ([`next_pass`] sizes them). A stop the user asks for
+/// ([`crate::interrupt`]) ends the render after the pass under way, or at once.
 pub fn render(
     scene: &Scene,
     strategy: &LightStrategy,
@@ -143,58 +192,77 @@ pub fn render(
     let mut film = Film::new(size, settings.aovs.wants_first_hit());
     let mut stats = RenderStats::default();
     let start = Instant::now();
-    let run = |film: &mut Film, first: u32, count: u32, stats: &mut RenderStats, pb: Option<&ProgressBar>| {
-        let (c, bad) = render_pass(scene, strategy, settings, film, first, count, pb);
+    if let Some(pb) = progress {
+        pb.set_length(match settings.budget {
+            Budget::Spp(n) => pixels * n as u64,
+            Budget::Time(limit) => limit.as_millis() as u64,
+        });
+    }
+    let mut per_spp = None;
+    while let Some(count) = next_pass(settings.budget, film.spp(), per_spp, start.elapsed()) {
+        let t0 = Instant::now();
+        let fixed = matches!(settings.budget, Budget::Spp(_));
+        let first = film.spp();
+        let (c, bad) = render_pass(scene, strategy, settings, &mut film, first, count, progress.filter(|_| fixed));
         stats.rays.add(&c);
         stats.non_finite_samples += bad;
-    };
-    match settings.budget {
-        Budget::Spp(n) => {
-            if let Some(pb) = progress {
-                pb.set_length(pixels * n as u64);
-            }
-            // Passes of 1, 1, 2, 4, … samples: `on_pass` sees the image at every power of two
-            // (convergence plots), and the sums equal one pass over 0..n bit for bit.
-            while film.spp() < n {
-                let first = film.spp();
-                let count = first.max(1).min(n - first);
-                run(&mut film, first, count, &mut stats, progress);
-                on_pass(&film, start.elapsed());
-            }
+        per_spp = Some(t0.elapsed() / count);
+        stats.stopped = interrupt::requested();
+        if stats.stopped == Stop::Now {
+            break;
         }
-        Budget::Time(limit) => {
-            if let Some(pb) = progress {
-                pb.set_length(limit.as_millis() as u64);
-            }
-            let mut per_spp = Duration::ZERO;
-            loop {
-                let elapsed = start.elapsed();
-                let left = limit.saturating_sub(elapsed);
-                // Passes of ~1/20 of the budget; stop when the next would overshoot by more
-                // than half a pass.
-                let count = if film.spp() == 0 {
-                    1
-                } else {
-                    let fits = left.as_secs_f64() / per_spp.as_secs_f64().max(1e-9);
-                    let chunk = (limit.as_secs_f64() / 20.0 / per_spp.as_secs_f64().max(1e-9)).max(1.0);
-                    if fits < 0.5 {
-                        break;
-                    }
-                    fits.min(chunk).round().max(1.0) as u32
-                };
-                let t0 = Instant::now();
-                let first = film.spp();
-                run(&mut film, first, count, &mut stats, None);
-                per_spp = t0.elapsed() / count;
-                on_pass(&film, start.elapsed());
-                if let Some(pb) = progress {
-                    pb.set_position(start.elapsed().as_millis().min(limit.as_millis()) as u64);
-                }
-            }
+        on_pass(&film, start.elapsed());
+        if let (Some(pb), Budget::Time(limit)) = (progress, settings.budget) {
+            pb.set_position(start.elapsed().as_millis().min(limit.as_millis()) as u64);
+        }
+        if stats.stopped == Stop::AfterPass {
+            break;
         }
     }
     stats.elapsed = start.elapsed();
     stats.spp = film.spp();
     stats.samples = pixels * film.spp() as u64;
     RenderOutput { film, stats }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The passes `budget` runs when every sample takes `per_spp`.
+    fn schedule(budget: Budget, per_spp: Duration) -> Vec<u32> {
+        let (mut done, mut passes, mut known) = (0u32, Vec::new(), None);
+        while let Some(n) = next_pass(budget, done, known, per_spp * done) {
+            passes.push(n);
+            done += n;
+            known = Some(per_spp);
+        }
+        passes
+    }
+
+    #[test]
+    fn fixed_spp_passes_reach_every_power_of_two_within_a_second_each() {
+        assert_eq!(schedule(Budget::Spp(8), Duration::from_millis(1)), [1, 1, 2, 4]);
+        assert_eq!(schedule(Budget::Spp(6), Duration::from_millis(1)), [1, 1, 2, 2]);
+        // 0.3 s per sample: at most 3 samples a pass, still ending at 4, 8, 16.
+        let slow = schedule(Budget::Spp(16), Duration::from_millis(300));
+        assert_eq!(slow, [1, 1, 2, 3, 1, 3, 3, 2]);
+        let mut ends: Vec<u32> = slow.iter().scan(0, |d, &n| Some(*d + n).inspect(|&e| *d = e)).collect();
+        ends.retain(|e| e.is_power_of_two());
+        assert_eq!(ends, [1, 2, 4, 8, 16]);
+        // A sample slower than the cap still makes progress.
+        assert_eq!(schedule(Budget::Spp(3), Duration::from_secs(2)), [1, 1, 1]);
+    }
+
+    #[test]
+    fn equal_time_passes_fill_the_budget_without_overshooting_by_half_a_pass() {
+        let budget = Duration::from_secs(1);
+        let passes = schedule(Budget::Time(budget), Duration::from_millis(7));
+        let total: u32 = passes.iter().sum();
+        // 1 s at 7 ms a sample: 142.9 samples fit; the last pass may not overshoot by half.
+        assert!((142..=143).contains(&total), "{passes:?}");
+        assert!(passes[1..].iter().all(|&n| n <= 8), "passes of ~1/20 of the budget: {passes:?}");
+        // A single sample longer than the budget: one pass.
+        assert_eq!(schedule(Budget::Time(budget), Duration::from_secs(3)), [1]);
+    }
 }

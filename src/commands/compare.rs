@@ -18,10 +18,11 @@ use crate::compare::plot::{Curve, convergence_svg};
 use crate::compare::report::{CompareReport, ReferenceInfo, RunResult, SamplerResult, Stat};
 use crate::error::{Error, Result};
 use crate::film::{AovSet, Film, Layers};
+use crate::fingerprint::Fingerprint;
+use crate::interrupt::Stop;
 use crate::light_sampler::{LightSamplerKind, LightStrategy};
 use crate::math::{Rgb, UVec2};
 use crate::render::{Budget, RenderSettings, render};
-use crate::sampling::fmix64;
 use crate::scene::{BuildOptions, Scene};
 
 /// The reference's seed: no compared run (seeds 1..=K) uses it.
@@ -109,6 +110,26 @@ fn default_reference_sampler(lights: usize) -> LightSamplerKind {
     }
 }
 
+/// Everything the rendered reference depends on: the bytes of every file the scene was read
+/// from, how it was read and built, every render setting, and this build of myriad.
+fn reference_key(opts: &CompareOptions, scene: &Scene, sampler: LightSamplerKind, max_depth: u32) -> Result<String> {
+    let mut key = Fingerprint::new("myriad compare reference");
+    for input in &scene.inputs {
+        key.file(input)?;
+    }
+    let size = scene.camera.resolution();
+    key.value("gltf_scene", format!("{:?}", opts.load.gltf_scene))
+        .value("punctual_scale", opts.load.punctual_scale.to_bits())
+        .value("camera", opts.camera.as_deref().unwrap_or("-"))
+        .value("resolution", format!("{}x{}", size.x, size.y))
+        .value("sampler", sampler.name())
+        .value("spp", opts.reference_spp)
+        .value("max_depth", max_depth)
+        .value("seed", REFERENCE_SEED)
+        .value("build", crate::fingerprint::build_id());
+    Ok(key.finish())
+}
+
 /// Loads the given reference, reuses a cached one, or renders and caches a new one.
 fn reference(opts: &CompareOptions, scene: &Scene, max_depth: u32) -> Result<Reference> {
     let size = scene.camera.resolution();
@@ -120,17 +141,7 @@ fn reference(opts: &CompareOptions, scene: &Scene, max_depth: u32) -> Result<Ref
     }
     let sampler = opts.reference_sampler.unwrap_or_else(|| default_reference_sampler(scene.lights.len()));
     let origin = format!("{sampler}, {} spp, seed {REFERENCE_SEED:#x}", opts.reference_spp);
-    // Everything that determines the reference.
-    let mut key = fmix64(crate::io::read_bytes(&opts.scene)?.iter().fold(0u64, |h, &b| fmix64(h ^ b as u64)));
-    for v in [size.x as u64, size.y as u64, max_depth as u64, opts.reference_spp as u64, REFERENCE_SEED] {
-        key = fmix64(key ^ v);
-    }
-    let key = format!(
-        "{key:016x} {} {} {}",
-        sampler.name(),
-        opts.camera.as_deref().unwrap_or("-"),
-        env!("CARGO_PKG_VERSION")
-    );
+    let key = reference_key(opts, scene, sampler, max_depth)?;
     let path = opts.out_dir.join("reference.exr");
     if path.exists()
         && let Ok(ReferenceFile { pixels, variance, meta }) = read_reference(&path, size)
@@ -145,6 +156,10 @@ fn reference(opts: &CompareOptions, scene: &Scene, max_depth: u32) -> Result<Ref
     let pb = progress_bar(opts.progress, "ref");
     let out = render(scene, &strategy, &settings, Some(&pb), &mut |_, _| {});
     pb.finish_and_clear();
+    // A reference stopped short is not the reference its key describes.
+    if out.stats.stopped != Stop::No {
+        return Err(Error::Interrupted);
+    }
     let mut meta = super::render::provenance(&opts.scene.display().to_string(), sampler, &settings, &out.stats);
     meta.push(("myriad.reference_key".into(), key));
     crate::io::exr::write(&path, &out.film.layers(aovs), &meta)?;
@@ -170,6 +185,8 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
     };
     // The scene must load before the output folder is made: a broken scene leaves nothing.
     let loaded = load_scene(Some(&opts.scene), &scene_options)?;
+    // Ctrl-C stops the comparison (after the pass under way) and writes no report.
+    let _busy = crate::interrupt::busy();
     crate::io::ensure_dir(&opts.out_dir)?;
     let scene = &loaded.scene;
     let max_depth = opts.max_depth.or(scene.render.max_depth).unwrap_or(DEFAULT_MAX_DEPTH);
@@ -205,6 +222,9 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
                 }
             });
             pb.finish_and_clear();
+            if r.stats.stopped != Stop::No {
+                return Err(Error::Interrupted);
+            }
             let pixels = r.film.means();
             let m = error_metrics(&pixels, &reference.pixels)?;
             let seconds = r.stats.elapsed.as_secs_f64();

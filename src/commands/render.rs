@@ -1,6 +1,7 @@
 //! `myriad render`: scene file → EXR (+ PNG preview) with a summary.
 
 use std::fmt;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -12,6 +13,7 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::film::AovSet;
+use crate::interrupt::Stop;
 use crate::light_sampler::{LightSamplerKind, LightStrategy};
 use crate::limits::human_bytes;
 use crate::math::UVec2;
@@ -149,9 +151,28 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
     let strategy = LightStrategy::build(sampler, &scene.lights, scene.radius);
     let sampler_build_time = t.elapsed();
 
+    let _busy = crate::interrupt::busy();
+    if opts.progress {
+        let res = scene.camera.resolution();
+        let budget = match settings.budget {
+            Budget::Spp(n) => format!("{n} spp"),
+            Budget::Time(t) => format!("{} s", t.as_secs_f64()),
+        };
+        // On stderr, beside the progress bar; a closed stderr does not stop the render.
+        let _ = writeln!(
+            std::io::stderr(),
+            "rendering {} × {}, {budget}, sampler {sampler} (Ctrl-C: finish this pass and write it; twice: stop \
+             and write nothing)",
+            res.x,
+            res.y
+        );
+    }
     let pb = progress_bar(opts.progress, sampler.name());
     let output = render_scene(scene, &strategy, &settings, Some(&pb), &mut |_, _| {});
     pb.finish_and_clear();
+    if output.stats.stopped == Stop::Now {
+        return Err(Error::Interrupted);
+    }
 
     let scene_name = opts.scene.as_deref().map_or(DEFAULT_SCENE_NAME.to_string(), |p| p.display().to_string());
     let meta = provenance(&scene_name, sampler, &settings, &output.stats);
@@ -243,6 +264,9 @@ impl fmt::Display for RenderReport {
             st.rays.rays,
             st.rays.shadow_rays
         )?;
+        if st.stopped == Stop::AfterPass {
+            writeln!(f, "stopped    interrupted after {} spp; the files hold what was rendered", st.spp)?;
+        }
         if st.non_finite_samples > 0 {
             writeln!(f, "warning    {} samples were not finite and counted as black", st.non_finite_samples)?;
         }

@@ -76,11 +76,15 @@ pub fn check_writable(path: &Path) -> Result<()> {
 }
 
 /// Writes `path` whole or not at all: `write` fills a temporary file beside it, which then
-/// replaces `path` by a rename. On any error the temporary file is removed and `path` is left
-/// as it was.
+/// replaces `path` by a rename. On any error, or when the user has asked to stop at once
+/// ([`crate::interrupt`]), the temporary file is removed and `path` is left as it was.
 pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
     let tmp = temp_path(path);
+    let _busy = crate::interrupt::busy();
     let result = write(&tmp).and_then(|()| {
+        if crate::interrupt::requested() == crate::interrupt::Stop::Now {
+            return Err(Error::Interrupted);
+        }
         std::fs::rename(&tmp, path)
             .map_err(|e| Error::Output { path: path.into(), message: format!("cannot be replaced: {e}") })
     });

@@ -28,6 +28,8 @@ pub struct LoadedMeshes {
     pub images: Vec<Image>,
     /// What was skipped or assumed.
     pub warnings: Vec<String>,
+    /// Files read: the OBJ, its material libraries, their textures.
+    pub inputs: Vec<std::path::PathBuf>,
 }
 
 fn parse_f32(m: &tobj::Material, key: &str) -> Option<f32> {
@@ -39,6 +41,7 @@ fn parse_f32(m: &tobj::Material, key: &str) -> Option<f32> {
 fn texture(name: Option<&str>, dir: &Path, out: &mut LoadedMeshes, material: &str) -> Option<TextureRef> {
     let name = name?.split_whitespace().last()?;
     let path = dir.join(name);
+    out.inputs.push(path.clone());
     match super::image_file::load(&path) {
         Ok(img) => {
             out.images.push(img);
@@ -129,8 +132,10 @@ pub fn load_meshes(path: &Path) -> Result<LoadedMeshes> {
     // tobj hands the material loader a name; our errors about the file it names come back
     // through here.
     let mtl_error = std::cell::RefCell::new(None);
+    let libraries = std::cell::RefCell::new(Vec::new());
     let load_mtl = |name: &Path| {
         let mtl = dir.join(name);
+        libraries.borrow_mut().push(mtl.clone());
         let text = read_text(&mtl).map_err(|_| tobj::LoadError::OpenFileFailed)?;
         let text = normalise_mtl(&text, &mtl.display().to_string()).map_err(|e| {
             mtl_error.replace(Some(e));
@@ -143,7 +148,8 @@ pub fn load_meshes(path: &Path) -> Result<LoadedMeshes> {
     if let Some(e) = mtl_error.into_inner() {
         return Err(e);
     }
-    let mut out = LoadedMeshes::default();
+    let mut out = LoadedMeshes { inputs: vec![path.to_path_buf()], ..Default::default() };
+    out.inputs.extend(libraries.into_inner());
     match materials {
         Ok(ms) => {
             let converted: Vec<Material> = ms.iter().map(|m| convert_material(m, dir, &mut out)).collect();
@@ -192,6 +198,7 @@ pub fn load_scene(path: &Path) -> Result<SceneDescription> {
     desc.materials = loaded.materials;
     desc.images = loaded.images;
     desc.warnings = loaded.warnings;
+    desc.inputs = loaded.inputs;
     for (i, mesh) in loaded.meshes.into_iter().enumerate() {
         desc.instances.push(InstanceDesc { mesh: i as u32, transform: Mat4::IDENTITY, name: mesh.name.clone() });
         desc.meshes.push(mesh);

@@ -32,7 +32,9 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<SceneDescription> {
         _ => Error::io(path, e),
     })?;
     let base = path.parent().unwrap_or(Path::new("."));
-    parse(&text, &path.display().to_string(), base, options)
+    let mut desc = parse(&text, &path.display().to_string(), base, options)?;
+    desc.inputs.insert(0, path.to_path_buf());
+    Ok(desc)
 }
 
 /// Compiles scene text; `source` names it in messages, `base_dir` resolves relative paths.

@@ -5,6 +5,7 @@
 //! in object space and placed by instances, so a loader never has to flatten. Positions and
 //! colours are validated by `scene::build`, not here.
 
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use crate::light_sampler::LightSamplerKind;
@@ -34,6 +35,9 @@ pub struct SceneDescription {
     pub lights: Vec<LightDesc>,
     /// Things the loader skipped or approximated, for the user.
     pub warnings: Vec<String>,
+    /// Every file read to make it (the scene, its buffers, images, included meshes and
+    /// material libraries), in the order read: what a cache of its renders depends on.
+    pub inputs: Vec<PathBuf>,
 }
 
 /// Render settings a scene file may carry. `None` means "use myriad's default".
@@ -233,5 +237,6 @@ impl SceneDescription {
         }));
         self.lights.extend(other.lights.iter().map(|l| l.transformed(&transform)));
         self.warnings.extend(other.warnings);
+        self.inputs.extend(other.inputs);
     }
 }

@@ -74,6 +74,8 @@ pub struct Scene {
     pub stats: SceneStats,
     /// What the loader and the build skipped or approximated.
     pub warnings: Vec<String>,
+    /// Every file the scene was read from ([`SceneDescription::inputs`]).
+    pub inputs: Vec<std::path::PathBuf>,
 }
 
 impl Scene {

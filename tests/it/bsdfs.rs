@@ -1,5 +1,7 @@
-//! BSDF tests: eval/pdf/sample agreement, reciprocity, energy conservation, and a chi-square
-//! test of sampled directions against the pdf (Mitsuba's `chi2` recipe).
+//! BSDF tests: eval/pdf/sample agreement, reciprocity, energy conservation, a chi-square
+//! test of sampled directions against the pdf (Mitsuba's `chi2` recipe), and the sampled
+//! weights against the numerically integrated `eval`, which ties sampling to the BSDF itself
+//! rather than to its own pdf.
 
 use crate::common::{chi_square, sidak};
 use myriad::material::{Bsdf, Diffuse, MetalRough};
@@ -101,48 +103,109 @@ fn albedo_never_exceeds_one() {
     }
 }
 
-/// Chi-square of sampled directions in (cos θ, φ) cells against the pdf integrated over each
-/// cell, plus one cell for failed samples (mass the pdf does not cover).
+/// The (cos θ, φ) cell of direction `wi` among `nz × nphi`.
+fn cell_of(wi: Vec3A, nz: usize, nphi: usize) -> usize {
+    let z = ((wi.z * nz as f32) as usize).min(nz - 1);
+    let phi = (wi.y.atan2(wi.x) as f64 + 2.0 * PI) % (2.0 * PI);
+    z * nphi + ((phi / (2.0 * PI) * nphi as f64) as usize).min(nphi - 1)
+}
+
+/// `f(wo, wi)` over cell `(zi, pi)` of `nz × nphi`, by the midpoint rule on `sub × sub`
+/// points (dω = dz dφ).
+fn integrate_cell(f: &dyn Fn(Vec3A) -> f64, zi: usize, pi: usize, (nz, nphi, sub): (usize, usize, usize)) -> f64 {
+    let (dz, dphi) = (1.0 / nz as f64, 2.0 * PI / nphi as f64);
+    let mut acc = 0.0;
+    for a in 0..sub {
+        for c in 0..sub {
+            let z = (zi as f64 + (a as f64 + 0.5) / sub as f64) * dz;
+            let phi = (pi as f64 + (c as f64 + 0.5) / sub as f64) * dphi;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            acc += f(Vec3A::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32));
+        }
+    }
+    acc / (sub * sub) as f64 * dz * dphi
+}
+
 #[test]
-fn sampled_directions_follow_the_pdf() {
-    let (nz, nphi, sub) = (16usize, 32usize, 6usize);
+fn sampled_weights_integrate_to_eval_in_every_cell() {
+    // E[weight · 1{wi ∈ cell}] = ∫_cell f(wo, wi) cos θi dω for each (cos θ, φ) cell: the
+    // weights a sampler returns are checked against `eval` alone. Per cell, z = (sum − n·∫)/σ
+    // with σ from the weights' own spread; Σ z² over cells is chi-square.
+    let grid = (8usize, 16usize, 16usize);
     let cases: Vec<_> = bsdfs().into_iter().flat_map(|b| [0.9f32, 0.4].map(move |c| (b.0, b.1, c))).collect();
     let alpha = sidak(cases.len());
     for (name, b, cos_o) in cases {
         let wo = wo_at(cos_o);
         let n = 200_000u64;
-        let mut observed = vec![0.0f64; nz * nphi + 1];
+        let cells = grid.0 * grid.1;
+        let (mut sum, mut sum_sq, mut count) = (vec![0.0f64; cells], vec![0.0f64; cells], vec![0u64; cells]);
+        for i in 0..n {
+            let (ul, u) = u2(i, 7);
+            if let Some(s) = b.sample(wo, ul, u) {
+                let (c, w) = (cell_of(s.wi, grid.0, grid.1), (s.weight.x + s.weight.y + s.weight.z) as f64);
+                sum[c] += w;
+                sum_sq[c] += w * w;
+                count[c] += 1;
+            }
+        }
+        let f = |wi: Vec3A| {
+            let v = b.eval(wo, wi) * wi.z;
+            (v.x + v.y + v.z) as f64
+        };
+        let (mut chi2, mut dof, mut pooled) = (0.0, 0usize, (0.0, 0.0, 0.0));
+        for zi in 0..grid.0 {
+            for pi in 0..grid.1 {
+                let c = zi * grid.1 + pi;
+                let expected = n as f64 * integrate_cell(&f, zi, pi, grid);
+                let var = sum_sq[c] - sum[c] * sum[c] / n as f64;
+                if count[c] >= 20 {
+                    chi2 += (sum[c] - expected).powi(2) / var;
+                    dof += 1;
+                } else {
+                    pooled = (pooled.0 + sum[c], pooled.1 + expected, pooled.2 + var);
+                }
+            }
+        }
+        let (s, e, v) = pooled;
+        if v > 0.0 {
+            chi2 += (s - e).powi(2) / v;
+            dof += 1;
+        } else {
+            assert!(
+                e < 1e-3 * n as f64,
+                "{name} cos_o {cos_o}: eval has mass {} where nothing is sampled",
+                e / n as f64
+            );
+        }
+        let p = crate::common::gamma_q(dof as f64 / 2.0, chi2 / 2.0);
+        assert!(p > alpha, "{name} cos_o {cos_o}: chi2 {chi2:.1} over {dof} cells, p = {p:.2e}");
+    }
+}
+
+/// Chi-square of sampled directions in (cos θ, φ) cells against the pdf integrated over each
+/// cell, plus one cell for failed samples (mass the pdf does not cover).
+#[test]
+fn sampled_directions_follow_the_pdf() {
+    let grid = (16usize, 32usize, 6usize);
+    let cases: Vec<_> = bsdfs().into_iter().flat_map(|b| [0.9f32, 0.4].map(move |c| (b.0, b.1, c))).collect();
+    let alpha = sidak(cases.len());
+    for (name, b, cos_o) in cases {
+        let wo = wo_at(cos_o);
+        let n = 200_000u64;
+        let cells = grid.0 * grid.1;
+        let mut observed = vec![0.0f64; cells + 1];
         for i in 0..n {
             let (ul, u) = u2(i, 6);
             match b.sample(wo, ul, u) {
-                Some(s) => {
-                    let z = ((s.wi.z * nz as f32) as usize).min(nz - 1);
-                    let phi = (s.wi.y.atan2(s.wi.x) as f64 + 2.0 * PI) % (2.0 * PI);
-                    let p = ((phi / (2.0 * PI) * nphi as f64) as usize).min(nphi - 1);
-                    observed[z * nphi + p] += 1.0;
-                }
-                None => observed[nz * nphi] += 1.0,
+                Some(s) => observed[cell_of(s.wi, grid.0, grid.1)] += 1.0,
+                None => observed[cells] += 1.0,
             }
         }
-        let mut expected = vec![0.0f64; nz * nphi + 1];
-        let (dz, dphi) = (1.0 / nz as f64, 2.0 * PI / nphi as f64);
-        for zi in 0..nz {
-            for pi in 0..nphi {
-                let mut acc = 0.0;
-                for a in 0..sub {
-                    for c in 0..sub {
-                        let z = (zi as f64 + (a as f64 + 0.5) / sub as f64) * dz;
-                        let phi = (pi as f64 + (c as f64 + 0.5) / sub as f64) * dphi;
-                        let r = (1.0 - z * z).max(0.0).sqrt();
-                        let wi = Vec3A::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
-                        acc += b.pdf(wo, wi) as f64;
-                    }
-                }
-                expected[zi * nphi + pi] = acc / (sub * sub) as f64 * dz * dphi * n as f64;
-            }
-        }
+        let pdf = |wi: Vec3A| b.pdf(wo, wi) as f64;
+        let mut expected: Vec<f64> =
+            (0..cells).map(|c| n as f64 * integrate_cell(&pdf, c / grid.1, c % grid.1, grid)).collect();
         let covered: f64 = expected.iter().sum();
-        expected[nz * nphi] = (n as f64 - covered).max(0.0);
+        expected.push((n as f64 - covered).max(0.0));
         let r = chi_square(&observed, &expected);
         assert!(r.p > alpha, "{name} cos_o {cos_o}: {r:?} (covered {:.4})", covered / n as f64);
     }

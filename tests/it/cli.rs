@@ -213,3 +213,78 @@ fn diff_of_a_broken_exr_is_an_error() {
     let err = stderr(&out);
     assert!(!out.status.success() && err.contains("b.exr") && !err.contains("panicked"), "{err}");
 }
+
+/// Starts `myriad render` of the built-in scene at `size` for a very long time in `dir`
+/// (which holds an earlier `out.exr`), and returns once it says it is rendering, with a
+/// thread collecting the rest of its stderr.
+fn start_long_render(dir: &Path, size: &str) -> (std::process::Child, std::thread::JoinHandle<String>) {
+    use std::io::BufRead;
+    std::fs::write(dir.join("out.exr"), b"the previous render").unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_myriad"))
+        .args(["render", "-o", "out.exr", "--spp", "1000000", "--resolution", size])
+        .current_dir(dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stderr = std::io::BufReader::new(child.stderr.take().unwrap());
+    let mut line = String::new();
+    while !line.starts_with("rendering") {
+        line.clear();
+        assert!(stderr.read_line(&mut line).unwrap() > 0, "myriad ended before rendering");
+    }
+    let rest = std::thread::spawn(move || {
+        let mut text = String::new();
+        std::io::Read::read_to_string(&mut stderr, &mut text).unwrap();
+        text
+    });
+    (child, rest)
+}
+
+fn signal(child: &std::process::Child, signal: i32) {
+    // SAFETY: kill sends a signal to a process we started; no memory is involved.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, signal) }, 0);
+}
+
+/// The names in `dir`, sorted.
+fn names(dir: &Path) -> Vec<String> {
+    let mut n: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    n.sort();
+    n
+}
+
+#[test]
+fn a_first_ctrl_c_finishes_the_pass_and_writes_what_was_rendered() {
+    let dir = tempfile::tempdir().unwrap();
+    let (child, _) = start_long_render(dir.path(), "64x48");
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    signal(&child, libc::SIGINT);
+    let out = child.wait_with_output().unwrap();
+    let summary = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(130), "{summary}");
+    assert!(summary.contains("interrupted after") && summary.contains("out.exr"), "{summary}");
+    let (_, meta) = myriad::io::exr::read(&dir.path().join("out.exr")).unwrap();
+    let spp: u32 = meta.iter().find(|(k, _)| k == "myriad.spp").unwrap().1.parse().unwrap();
+    assert!((1..1_000_000).contains(&spp), "{spp} spp");
+    assert_eq!(names(dir.path()), ["out.exr", "out.png"], "temporary files left");
+}
+
+#[test]
+fn a_second_ctrl_c_or_a_sigterm_writes_nothing_and_leaves_no_temporary_file() {
+    // Large enough that writing the image takes longer than the 20 ms between the signals.
+    for signals in [&[libc::SIGINT, libc::SIGINT][..], &[libc::SIGTERM]] {
+        let dir = tempfile::tempdir().unwrap();
+        let (child, stderr) = start_long_render(dir.path(), "1280x960");
+        for &s in signals {
+            signal(&child, s);
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        let out = child.wait_with_output().unwrap();
+        let err = stderr.join().unwrap();
+        assert_eq!(out.status.code(), Some(130), "{signals:?}: {err}");
+        assert!(err.contains("nothing was written"), "{signals:?}: {err}");
+        assert_eq!(std::fs::read(dir.path().join("out.exr")).unwrap(), b"the previous render");
+        assert_eq!(names(dir.path()), ["out.exr"], "{signals:?}: files left");
+    }
+}

@@ -110,20 +110,26 @@ fn the_bias_flag_fires_for_a_biased_estimator() {
 }
 
 #[test]
-fn equal_time_stays_near_the_budget() {
+fn equal_time_reports_what_each_sampler_reached() {
+    // How the passes fill the budget is tested on a synthetic clock (`render::tests`); here,
+    // on a real one that a loaded machine can slow down at will, only what holds at any speed.
     let dir = tempfile::tempdir().unwrap();
     let mut opts = options(
         dir.path(),
         vec![LightSamplerKind::Power, LightSamplerKind::Local],
-        Budget::Time(Duration::from_millis(600)),
+        Budget::Time(Duration::from_millis(300)),
     );
     opts.seeds = 1;
     let report = compare(&opts).unwrap();
     for s in &report.samplers {
-        let t = s.runs[0].seconds;
-        assert!((t - 0.6).abs() <= 0.06, "{}: {t} s for a 0.6 s budget", s.sampler);
-        assert!(s.runs[0].convergence.len() >= 5, "passes give a convergence curve");
+        let run = &s.runs[0];
+        assert!(run.spp >= 1 && run.seconds > 0.0, "{}: {} spp in {} s", s.sampler, run.spp, run.seconds);
+        let times: Vec<f64> = run.convergence.iter().map(|p| p.0).collect();
+        assert!(!times.is_empty() && times.windows(2).all(|w| w[0] < w[1]), "{}: {times:?}", s.sampler);
+        assert!(times.last().unwrap() <= &run.seconds, "{}: passes end within the run", s.sampler);
+        assert!(run.convergence.iter().all(|p| p.1 > 0.0), "{}: relMSE after each pass", s.sampler);
     }
+    assert!(report.samplers.iter().all(|s| s.efficiency.mean > 0.0));
 }
 
 #[test]
@@ -142,4 +148,41 @@ fn diff_measures_and_refuses_mismatched_images() {
     compare(&small).unwrap();
     let e = diff(&dir.path().join("small/power.exr"), &r, None).err().unwrap().to_string();
     assert!(e.contains("20 × 15") && e.contains("40 × 30"), "{e}");
+}
+
+#[test]
+fn the_cached_reference_is_keyed_on_every_input() {
+    // A RON scene placing an OBJ whose MTL sets the lamp: a change to any file, or to how the
+    // scene is read or rendered, must render the reference again.
+    let dir = tempfile::tempdir().unwrap();
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/cornell");
+    for f in ["cornell.obj", "cornell.mtl"] {
+        std::fs::copy(data.join(f), dir.path().join(f)).unwrap();
+    }
+    let scene = dir.path().join("box.ron");
+    std::fs::write(
+        &scene,
+        r#"Scene(camera: Perspective(eye: (0, 1, 4.4), look_at: (0, 1, 0), yfov_deg: 37),
+                objects: [Mesh(path: "cornell.obj")])"#,
+    )
+    .unwrap();
+    let mut opts = options(&dir.path().join("out"), vec![LightSamplerKind::Power], Budget::Spp(1));
+    (opts.scene, opts.seeds, opts.reference_spp, opts.resolution) = (scene, 1, 2, Some(UVec2::new(16, 12)));
+    let reused = |opts: &CompareOptions| compare(opts).unwrap().reference.reused;
+    assert!(!reused(&opts), "first run renders");
+    assert!(reused(&opts), "same inputs reuse");
+    let mtl = dir.path().join("cornell.mtl");
+    let text = std::fs::read_to_string(&mtl).unwrap();
+    std::fs::write(&mtl, text.replace("Ke 17 12 4", "Ke 17 12 5")).unwrap();
+    assert!(!reused(&opts), "an edited material library renders again");
+    assert!(reused(&opts));
+    opts.load.punctual_scale = 1.0;
+    assert!(!reused(&opts), "another punctual scale renders again");
+    opts.reference_spp = 3;
+    assert!(!reused(&opts), "another reference spp renders again");
+    opts.max_depth = Some(2);
+    assert!(!reused(&opts), "another depth renders again");
+    opts.camera = Some("camera".into());
+    assert!(!reused(&opts), "another camera option renders again");
+    assert!(reused(&opts));
 }

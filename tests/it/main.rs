@@ -7,5 +7,6 @@ mod common;
 mod compare;
 mod formats;
 mod light_samplers;
+mod mutation;
 mod render;
 mod scene_loading;

@@ -228,8 +228,10 @@ fn check_node_forest(root: &Root) -> Result<(), (String, String)> {
 }
 
 /// The files buffers and images refer to: each URI decodes (percent-encoding to UTF-8) and
-/// names a regular file, not a device or a folder that reading would never finish.
-pub fn external_files(file: &str, root: &Root, base: Option<&std::path::Path>) -> Result<()> {
+/// names a regular file, not a device or a folder that reading would never finish. Returns
+/// their paths.
+pub fn external_files(file: &str, root: &Root, base: Option<&std::path::Path>) -> Result<Vec<std::path::PathBuf>> {
+    let mut paths = Vec::new();
     let uris = root.buffers.iter().enumerate().filter_map(|(i, b)| Some((format!("buffers[{i}]"), b.uri.as_deref()?)));
     let images = root.images.iter().enumerate().filter_map(|(i, m)| Some((format!("images[{i}]"), m.uri.as_deref()?)));
     for (at, uri) in uris.chain(images) {
@@ -247,6 +249,7 @@ pub fn external_files(file: &str, root: &Root, base: Option<&std::path::Path>) -
         {
             return Err(Error::scene(file, at, format!("refers to '{}', which is not a regular file", path.display())));
         }
+        paths.push(path);
     }
-    Ok(())
+    Ok(paths)
 }

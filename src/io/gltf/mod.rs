@@ -45,7 +45,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<SceneDescription> {
     let raw = gltf::Gltf::from_slice_without_validation(text).map_err(|e| parse_error(&file, text, e))?;
     let base = path.parent();
     check::structure(&file, raw.document.as_json())?;
-    check::external_files(&file, raw.document.as_json(), base)?;
+    let external = check::external_files(&file, raw.document.as_json(), base)?;
     let gltf = gltf::Gltf {
         document: gltf::Document::from_json(raw.document.into_json()).map_err(|e| parse_error(&file, text, e))?,
         blob: raw.blob,
@@ -54,7 +54,11 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<SceneDescription> {
     let mut loader = Loader {
         file: &file,
         buffers: &buffers,
-        desc: SceneDescription { source: file.clone(), ..Default::default() },
+        desc: SceneDescription {
+            source: file.clone(),
+            inputs: std::iter::once(path.to_path_buf()).chain(external).collect(),
+            ..Default::default()
+        },
     };
     let doc = &gltf.document;
     let unsupported: Vec<&str> = doc.extensions_used().filter(|e| !SUPPORTED.contains(e)).collect();

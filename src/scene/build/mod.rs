@@ -242,6 +242,7 @@ pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
         render: desc.render,
         stats,
         warnings,
+        inputs: desc.inputs.clone(),
     })
 }
 
