@@ -19,6 +19,13 @@ fn bsdfs() -> Vec<(&'static str, Bsdf)> {
     ]
 }
 
+/// Every BSDF at a steep and a grazing outgoing direction, with the Šidák-corrected level.
+fn cases() -> (Vec<(&'static str, Bsdf, Vec3A)>, f64) {
+    let cases: Vec<_> = bsdfs().into_iter().flat_map(|b| [0.9f32, 0.4].map(move |c| (b.0, b.1, wo_at(c)))).collect();
+    let alpha = sidak(cases.len());
+    (cases, alpha)
+}
+
 fn wo_at(cos_theta: f32) -> Vec3A {
     Vec3A::new((1.0 - cos_theta * cos_theta).sqrt(), 0.0, cos_theta)
 }
@@ -132,10 +139,8 @@ fn sampled_weights_integrate_to_eval_in_every_cell() {
     // weights a sampler returns are checked against `eval` alone. Per cell, z = (sum − n·∫)/σ
     // with σ from the weights' own spread; Σ z² over cells is chi-square.
     let grid = (8usize, 16usize, 16usize);
-    let cases: Vec<_> = bsdfs().into_iter().flat_map(|b| [0.9f32, 0.4].map(move |c| (b.0, b.1, c))).collect();
-    let alpha = sidak(cases.len());
-    for (name, b, cos_o) in cases {
-        let wo = wo_at(cos_o);
+    let (cases, alpha) = cases();
+    for (name, b, wo) in cases {
         let n = 200_000u64;
         let cells = grid.0 * grid.1;
         let (mut sum, mut sum_sq, mut count) = (vec![0.0f64; cells], vec![0.0f64; cells], vec![0u64; cells]);
@@ -171,14 +176,10 @@ fn sampled_weights_integrate_to_eval_in_every_cell() {
             chi2 += (s - e).powi(2) / v;
             dof += 1;
         } else {
-            assert!(
-                e < 1e-3 * n as f64,
-                "{name} cos_o {cos_o}: eval has mass {} where nothing is sampled",
-                e / n as f64
-            );
+            assert!(e < 1e-3 * n as f64, "{name} wo {wo}: eval has mass {} where nothing is sampled", e / n as f64);
         }
         let p = crate::common::gamma_q(dof as f64 / 2.0, chi2 / 2.0);
-        assert!(p > alpha, "{name} cos_o {cos_o}: chi2 {chi2:.1} over {dof} cells, p = {p:.2e}");
+        assert!(p > alpha, "{name} wo {wo}: chi2 {chi2:.1} over {dof} cells, p = {p:.2e}");
     }
 }
 
@@ -187,10 +188,8 @@ fn sampled_weights_integrate_to_eval_in_every_cell() {
 #[test]
 fn sampled_directions_follow_the_pdf() {
     let grid = (16usize, 32usize, 6usize);
-    let cases: Vec<_> = bsdfs().into_iter().flat_map(|b| [0.9f32, 0.4].map(move |c| (b.0, b.1, c))).collect();
-    let alpha = sidak(cases.len());
-    for (name, b, cos_o) in cases {
-        let wo = wo_at(cos_o);
+    let (cases, alpha) = cases();
+    for (name, b, wo) in cases {
         let n = 200_000u64;
         let cells = grid.0 * grid.1;
         let mut observed = vec![0.0f64; cells + 1];
@@ -207,6 +206,6 @@ fn sampled_directions_follow_the_pdf() {
         let covered: f64 = expected.iter().sum();
         expected.push((n as f64 - covered).max(0.0));
         let r = chi_square(&observed, &expected);
-        assert!(r.p > alpha, "{name} cos_o {cos_o}: {r:?} (covered {:.4})", covered / n as f64);
+        assert!(r.p > alpha, "{name} wo {wo}: {r:?} (covered {:.4})", covered / n as f64);
     }
 }

@@ -28,19 +28,25 @@ fn scene_file(text: &str) -> (tempfile::TempDir, PathBuf) {
     (dir, path)
 }
 
-/// Runs `render` on `text` and expects failure mentioning every string in `needles`; checks
-/// that no output (or temporary) file appeared.
-fn expect_error(text: &str, needles: &[&str]) {
+/// Runs the binary with `args` in a folder holding `text` as `scene.ron`, expecting a clear
+/// error mentioning every one of `needles` and no file besides the scene (no output, no
+/// temporary file).
+fn expect_failure(text: &str, args: &[&str], needles: &[&str]) {
     let (dir, _) = scene_file(text);
-    let out = myriad(&["render", "scene.ron", "-o", "out.exr", "--spp", "1"], dir.path());
+    let out = myriad(args, dir.path());
     let err = stderr(&out);
-    assert!(!out.status.success(), "expected failure, got success: {err}");
-    assert!(!err.contains("panicked"), "panic: {err}");
+    assert!(!out.status.success(), "{args:?} succeeded: {err}");
+    assert!(!err.contains("panicked") && !err.contains(myriad::guard::BUG_REPORT), "{args:?}: {err}");
     for n in needles {
-        assert!(err.contains(n), "error message lacks '{n}':\n{err}");
+        assert!(err.contains(n), "{args:?}: error lacks '{n}':\n{err}");
     }
     let files: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
-    assert_eq!(files, vec![std::ffi::OsString::from("scene.ron")], "files left behind");
+    assert_eq!(files, vec![std::ffi::OsString::from("scene.ron")], "{args:?}: files left behind");
+}
+
+/// Renders `text` and expects failure mentioning every one of `needles`.
+fn expect_error(text: &str, needles: &[&str]) {
+    expect_failure(text, &["render", "scene.ron", "-o", "out.exr", "--spp", "1"], needles);
 }
 
 #[test]
@@ -159,19 +165,9 @@ fn info_reports_counts() {
     assert!(text.contains("B/triangle"), "{text}");
 }
 
-/// Runs the binary with `args` in a folder holding the good scene, expecting a clear error
-/// mentioning every one of `needles` and no file besides the scene.
+/// Runs the binary with `args` beside the good scene, expecting a clear error.
 fn expect_usage_error(args: &[&str], needles: &[&str]) {
-    let (dir, _) = scene_file(GOOD);
-    let out = myriad(args, dir.path());
-    let err = stderr(&out);
-    assert!(!out.status.success(), "{args:?} succeeded: {err}");
-    assert!(!err.contains("panicked") && !err.contains(myriad::guard::BUG_REPORT), "{args:?}: {err}");
-    for n in needles {
-        assert!(err.contains(n), "{args:?}: error lacks '{n}':\n{err}");
-    }
-    let files: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
-    assert_eq!(files, vec![std::ffi::OsString::from("scene.ron")], "{args:?}: files left behind");
+    expect_failure(GOOD, args, needles);
 }
 
 #[test]
