@@ -11,7 +11,7 @@ use crate::geometry::{Ray, offset_ray_origin};
 use crate::light::{Light, LightId};
 use crate::light_sampler::{LightSampler, LightStrategy, ShadingContext};
 use crate::material::ShadingPoint;
-use crate::math::{Rgb, Vec2, Vec3A, power_heuristic};
+use crate::math::{Rgb, Vec3A, power_heuristic};
 use crate::sampling::{Dim, SampleStream};
 use crate::scene::Scene;
 
@@ -34,7 +34,7 @@ fn light_contribution(
     sp: &ShadingPoint,
     p: Vec3A,
     wo: Vec3A,
-    u: Vec2,
+    u: [u64; 2],
     counters: &mut RayCounters,
 ) -> Rgb {
     let Some(ls) = light.sample_li(p, u) else { return Rgb::ZERO };
@@ -76,13 +76,13 @@ pub fn estimate_direct(
             .iter()
             .enumerate()
             .map(|(i, light)| {
-                let u = stream.get_2d(bounce, Dim::LightPoint, i as u32);
+                let u = stream.get_2d_u64(bounce, Dim::LightPoint, i as u32);
                 light_contribution(scene, light, 1.0, sp, p, wo, u, counters)
             })
             .fold(Rgb::ZERO, |a, b| a + b),
         LightStrategy::One(sampler) => {
             let u_select = stream.get_1d_u64(bounce, Dim::LightSelect, 0);
-            let u_point = stream.get_2d(bounce, Dim::LightPoint, 0);
+            let u_point = stream.get_2d_u64(bounce, Dim::LightPoint, 0);
             let ctx = ShadingContext { p, n: sp.frame.n };
             match sampler.sample_prefetching(&ctx, u_select, &scene.lights) {
                 Some(s) => {

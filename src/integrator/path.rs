@@ -10,7 +10,7 @@ use super::RayCounters;
 use super::direct::{estimate_direct, selection_pmf};
 use crate::film::FirstHit;
 use crate::geometry::{Ray, offset_ray_origin};
-use crate::light::LightId;
+use crate::light::{Light, LightId};
 use crate::light_sampler::{LightStrategy, ShadingContext};
 use crate::material::ShadingPoint;
 use crate::math::{Rgb, power_heuristic};
@@ -27,6 +27,25 @@ pub struct PathSample {
     pub radiance: Rgb,
     /// The first surface hit, for AOVs.
     pub first_hit: Option<FirstHit>,
+}
+
+/// Radiance from the environment along `dir` for a ray that left the scene, MIS-weighted
+/// against next-event estimation when the ray was found by BSDF sampling at `prev`.
+#[inline]
+fn escaped(
+    scene: &Scene,
+    strategy: &LightStrategy,
+    dir: crate::math::Vec3A,
+    prev: Option<(ShadingContext, f32)>,
+) -> Rgb {
+    let Some(id) = scene.environment else { return Rgb::ZERO };
+    let Light::Environment(env) = &scene.lights[id as usize] else { unreachable!("the environment index") };
+    let le = env.radiance_from(dir);
+    let weight = match prev {
+        None => 1.0,
+        Some((ctx, bsdf_pdf)) => power_heuristic(bsdf_pdf, selection_pmf(strategy, &ctx, LightId(id)) * env.pdf(dir)),
+    };
+    le * weight
 }
 
 /// Radiance arriving along `ray` (a camera ray), with at most `max_depth` scattering events.
@@ -47,7 +66,10 @@ pub fn radiance(
     let mut depth = 0u32;
     loop {
         counters.rays += 1;
-        let Some(hit) = scene.intersect(&ray, f32::INFINITY) else { break };
+        let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
+            l += beta * escaped(scene, strategy, ray.dir.normalize(), prev);
+            break;
+        };
         let wo = -ray.dir.normalize();
         if depth == 0 {
             let n = if hit.n_shading.dot(wo) < 0.0 { -hit.n_shading } else { hit.n_shading };

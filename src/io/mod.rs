@@ -5,6 +5,7 @@
 //! a full disk or Ctrl-C never leaves a truncated file (write a temporary file beside the
 //! target, then rename it over).
 
+pub mod environment;
 pub mod exr;
 pub mod gltf;
 pub mod image_file;

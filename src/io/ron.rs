@@ -14,13 +14,16 @@ use ::ron::extensions::Extensions;
 
 use super::LoadOptions;
 use crate::error::{Error, Result};
+use crate::light::EnvironmentLight;
 use crate::material::Material;
 use crate::math::{Mat4, Rgb, UVec2, Vec3A};
 use crate::scene::MAX_RESOLUTION;
 use crate::scene::description::{
     CameraDesc, CameraPlacement, InstanceDesc, LightDesc, RenderDefaults, SceneDescription,
 };
-use crate::scene::format::{CameraSpec, LightSpec, MaterialSpec, ObjectSpec, SceneFile, TransformSpec};
+use crate::scene::format::{
+    CameraSpec, EnvironmentSpec, LightSpec, MaterialSpec, ObjectSpec, SceneFile, TransformSpec,
+};
 use crate::scene::shapes;
 
 /// Reads and compiles the scene file at `path`.
@@ -99,6 +102,38 @@ fn material(name: &str, spec: &MaterialSpec) -> Material {
             Material { emission: v3(radiance), double_sided: two_sided, ..Material::diffuse(name, v3(albedo)) }
         }
     }
+}
+
+/// The scene's environment, its map read relative to the scene (and listed in `inputs`).
+fn environment(
+    spec: &EnvironmentSpec,
+    source: &str,
+    base_dir: &Path,
+    inputs: &mut Vec<std::path::PathBuf>,
+) -> Result<(String, EnvironmentLight)> {
+    Ok(match spec {
+        EnvironmentSpec::Constant { radiance } => {
+            ("environment".into(), EnvironmentLight { radiance: v3(*radiance), map: None, rotation: 0.0 })
+        }
+        EnvironmentSpec::Map { path, scale, rotate_deg } => {
+            if !scale.is_finite() || *scale < 0.0 || !rotate_deg.is_finite() {
+                return Err(Error::scene(
+                    source,
+                    "environment",
+                    format!("needs a finite scale ≥ 0 (not {scale}) and a finite rotation (not {rotate_deg})"),
+                ));
+            }
+            let full = base_dir.join(path);
+            let map = super::environment::load(&full)?;
+            inputs.push(full.clone());
+            let light = EnvironmentLight {
+                radiance: Rgb::splat(*scale),
+                map: Some(Arc::new(map)),
+                rotation: rotate_deg.to_radians(),
+            };
+            (format!("environment '{}'", full.display()), light)
+        }
+    })
 }
 
 fn compile(file: SceneFile, source: &str, base_dir: &Path, options: &LoadOptions) -> Result<SceneDescription> {
@@ -199,6 +234,10 @@ fn compile(file: SceneFile, source: &str, base_dir: &Path, options: &LoadOptions
                 desc.include(loaded, transform(t), override_material);
             }
         }
+    }
+
+    if let Some(env) = &file.environment {
+        desc.environment = Some(environment(env, source, base_dir, &mut desc.inputs)?);
     }
 
     for (i, light) in file.lights.iter().enumerate() {

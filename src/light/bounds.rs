@@ -300,6 +300,18 @@ impl Light {
                 two_sided: false,
                 infinite: true,
             },
+            // The irradiance a uniform environment of the mean radiance gives, from every
+            // direction (a whole-sphere cone).
+            Light::Environment(l) => LightBounds {
+                min: Vec3A::ZERO,
+                max: Vec3A::ZERO,
+                phi: floor(PI * l.mean_radiance().max_element()),
+                w: Vec3A::Y,
+                cos_theta_o: -1.0,
+                cos_theta_e: 0.0,
+                two_sided: false,
+                infinite: true,
+            },
             Light::Triangle(l) => LightBounds {
                 min: l.v[0].min(l.v[1]).min(l.v[2]),
                 max: l.v[0].max(l.v[1]).max(l.v[2]),

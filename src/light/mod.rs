@@ -4,11 +4,13 @@
 //! Owns: the closed set [`Light`] (one struct per kind, one file each) and [`LightSample`].
 //! Units (conventions.md): area lights carry radiance [W/(m²·sr)], point and spot lights
 //! radiant intensity [W/sr], directional lights irradiance [W/m²]. Powers are in watts of
-//! luminance (Rec.709 Y), the scalar the `power` sampler compares. Depends on `math`.
+//! luminance (Rec.709 Y), the scalar the `power` sampler compares. Depends on `math` and
+//! `sampling` (for the numbers that pick points).
 
 mod area;
 mod bounds;
 mod distant;
+mod environment;
 mod point;
 mod quad;
 mod spot;
@@ -17,12 +19,14 @@ mod triangle;
 pub use area::AreaEmission;
 pub use bounds::{BoundsPacket, LightBounds, cone_union};
 pub use distant::DistantLight;
+pub use environment::{EnvironmentLight, EnvironmentMap};
 pub use point::PointLight;
 pub use quad::QuadLight;
 pub use spot::SpotLight;
 pub use triangle::{EmissionTexture, TriangleLight};
 
 use crate::math::{Rgb, Vec2, Vec3A};
+use crate::sampling::unit_f32;
 
 /// Index of a light in the scene's light list.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -59,27 +63,33 @@ pub enum Light {
     Triangle(TriangleLight),
     /// Emissive parallelogram (RON quads and grid cells).
     Quad(QuadLight),
+    /// Radiance from every direction at infinity (found by rays that leave the scene).
+    Environment(EnvironmentLight),
 }
 
 impl Light {
-    /// Samples the light as seen from `p` with `u ∈ [0,1)²`; `None` when it cannot reach `p`.
+    /// Samples the light as seen from `p` with two 64-bit numbers (area lights take their
+    /// top 24 bits as floats in `[0,1)²`); `None` when it cannot reach `p`.
     #[inline]
-    pub fn sample_li(&self, p: Vec3A, u: Vec2) -> Option<LightSample> {
+    pub fn sample_li(&self, p: Vec3A, u: [u64; 2]) -> Option<LightSample> {
+        let unit = || Vec2::new(unit_f32(u[0]), unit_f32(u[1]));
         match self {
             Light::Point(l) => l.sample_li(p),
             Light::Spot(l) => l.sample_li(p),
             Light::Distant(l) => l.sample_li(),
-            Light::Triangle(l) => l.sample_li(p, u),
-            Light::Quad(l) => l.sample_li(p, u),
+            Light::Triangle(l) => l.sample_li(p, unit()),
+            Light::Quad(l) => l.sample_li(p, unit()),
+            Light::Environment(l) => l.sample_li(u),
         }
     }
 
     /// Solid-angle density with which [`Light::sample_li`] from `p` picks the light point `q`
-    /// with normal `n_q`. Zero for delta lights (they cannot be hit).
+    /// with normal `n_q`. Zero for delta lights (they cannot be hit) and the environment
+    /// (which rays reach by leaving the scene: [`EnvironmentLight::pdf`]).
     #[inline]
     pub fn pdf_li(&self, p: Vec3A, q: Vec3A, n_q: Vec3A) -> f32 {
         match self {
-            Light::Point(_) | Light::Spot(_) | Light::Distant(_) => 0.0,
+            Light::Point(_) | Light::Spot(_) | Light::Distant(_) | Light::Environment(_) => 0.0,
             Light::Triangle(l) => l.emission.pdf_li(p, q, n_q, l.area),
             Light::Quad(l) => l.emission.pdf_li(p, q, n_q, l.area),
         }
@@ -90,7 +100,7 @@ impl Light {
     #[inline]
     pub fn emitted(&self, n_geom: Vec3A, dir: Vec3A, uv: Vec2) -> Rgb {
         match self {
-            Light::Point(_) | Light::Spot(_) | Light::Distant(_) => Rgb::ZERO,
+            Light::Point(_) | Light::Spot(_) | Light::Distant(_) | Light::Environment(_) => Rgb::ZERO,
             Light::Triangle(l) => l.emitted(uv, -dir),
             Light::Quad(l) => l.emission.radiance_towards(n_geom, -dir),
         }
@@ -104,6 +114,7 @@ impl Light {
             Light::Distant(l) => l.power(scene_radius),
             Light::Triangle(l) => AreaEmission { radiance: l.mean_radiance(), ..l.emission }.power(l.area),
             Light::Quad(l) => l.emission.power(l.area),
+            Light::Environment(l) => l.power(scene_radius),
         }
     }
 
@@ -121,6 +132,7 @@ impl Light {
             Light::Distant(_) => "directional",
             Light::Triangle(_) => "triangle",
             Light::Quad(_) => "quad",
+            Light::Environment(_) => "environment",
         }
     }
 }

@@ -125,6 +125,9 @@ pub struct DiscreteSample {
     pub index: usize,
     /// Its probability: its cell's width / 2⁶⁴.
     pub pmf: f32,
+    /// Where in its cell the number fell, in `[0,1)`: uniform given the index, free for a
+    /// continuous position within the entry (piecewise-constant densities).
+    pub offset: f32,
 }
 
 impl Distribution1D {
@@ -171,7 +174,9 @@ impl Distribution1D {
         // The last cell starting at or before u; empty cells share their start with the
         // next one, so the last of them is the non-empty cell holding u.
         let index = self.starts.partition_point(|&s| s <= u) - 1;
-        DiscreteSample { index, pmf: self.pmf(index) }
+        let (start, end) = self.cell(index);
+        let offset = ((u as u128 - start) as f64 / (end - start) as f64).min(1.0 - f64::EPSILON) as f32;
+        DiscreteSample { index, pmf: probability(end - start), offset: offset.min(1.0 - f32::EPSILON / 2.0) }
     }
 
     /// Bytes held by the table.
@@ -246,8 +251,11 @@ mod tests {
             assert_eq!(d.pmf(i), probability(b - a));
             if b > a {
                 for u in [a, b - 1, (a + b) / 2] {
-                    assert_eq!(d.sample(u as u64), DiscreteSample { index: i, pmf: d.pmf(i) });
+                    let s = d.sample(u as u64);
+                    assert_eq!((s.index, s.pmf), (i, d.pmf(i)));
+                    assert!((0.0..1.0).contains(&s.offset));
                 }
+                assert_eq!(d.sample(a as u64).offset, 0.0);
             } else {
                 assert_eq!(weight, 0.0);
             }

@@ -72,12 +72,29 @@ impl SampleStream {
         (high << 32) | low
     }
 
+    /// Two 64-bit numbers for a 2D `dim`, stratified together as [`get_2d`](Self::get_2d)'s
+    /// (whose numbers are their top 24 bits, see [`unit_f32`]), with 32 hashed bits below each.
+    #[inline]
+    pub fn get_2d_u64(&self, bounce: u32, dim: Dim, sub: u32) -> [u64; 2] {
+        let seed = self.seed(bounce, dim as u64, sub);
+        let (x, y) = sobol::sample_2d(self.sample_reversed, seed);
+        let low = fmix64(seed.rotate_left(29) ^ self.sample_reversed as u64);
+        [((x as u64) << 32) | (low >> 32), ((y as u64) << 32) | (low & 0xffff_ffff)]
+    }
+
     /// Two numbers in `[0,1)²` for a 2D `dim`, stratified together.
     #[inline]
     pub fn get_2d(&self, bounce: u32, dim: Dim, sub: u32) -> Vec2 {
         let (x, y) = sobol::sample_2d(self.sample_reversed, self.seed(bounce, dim as u64, sub));
         Vec2::new(sobol::to_unit32(x), sobol::to_unit32(y))
     }
+}
+
+/// A 64-bit number as a float in `[0,1)`: its top 24 bits, the same float the 32-bit
+/// getters give for the same point.
+#[inline]
+pub fn unit_f32(u: u64) -> f32 {
+    sobol::to_unit32((u >> 32) as u32)
 }
 
 #[cfg(test)]
@@ -99,6 +116,8 @@ mod tests {
         let wide = a.get_1d_u64(2, Dim::LightSelect, 0);
         assert_eq!((wide >> 40) as f32 / (1u32 << 24) as f32, a.get_1d(2, Dim::LightSelect, 0));
         assert_ne!(wide & 0xffff_ffff, SampleStream::new(7, 123, 5).get_1d_u64(2, Dim::LightSelect, 0) & 0xffff_ffff);
+        let [x, y] = a.get_2d_u64(1, Dim::LightPoint, 3);
+        assert_eq!(Vec2::new(unit_f32(x), unit_f32(y)), a.get_2d(1, Dim::LightPoint, 3));
     }
 
     #[test]

@@ -8,6 +8,7 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
+use crate::light::EnvironmentLight;
 use crate::light_sampler::LightSamplerKind;
 use crate::material::{Image, Material};
 use crate::math::{Mat4, Rgb, UVec2, Vec2, Vec3A};
@@ -38,6 +39,8 @@ pub struct SceneDescription {
     /// Every file read to make it (the scene, its buffers, images, included meshes and
     /// material libraries), in the order read: what a cache of its renders depends on.
     pub inputs: Vec<PathBuf>,
+    /// The environment, if any (with a label for messages).
+    pub environment: Option<(String, EnvironmentLight)>,
 }
 
 /// Render settings a scene file may carry. `None` means "use myriad's default".

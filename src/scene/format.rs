@@ -47,6 +47,31 @@ pub struct SceneFile {
     /// Lights (besides objects with emissive materials).
     #[serde(default)]
     pub lights: Vec<LightSpec>,
+    /// Light from infinitely far in every direction, seen where rays leave the scene.
+    pub environment: Option<EnvironmentSpec>,
+}
+
+/// The environment.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum EnvironmentSpec {
+    /// The same radiance from every direction [W/(m²·sr)].
+    Constant {
+        /// Radiance per channel.
+        radiance: V3,
+    },
+    /// An equirectangular (latitude-longitude) map, `.exr` or `.hdr`, in linear radiance, as
+    /// Blender reads one: the image's centre looks along +X, its top row is straight up (+Y).
+    Map {
+        /// The image file.
+        path: String,
+        /// Factor on every texel (Blender's background strength).
+        #[serde(default = "one")]
+        scale: f32,
+        /// Turns the map about +Y, degrees (positive: from +X towards −Z).
+        #[serde(default)]
+        rotate_deg: f32,
+    },
 }
 
 /// Camera.

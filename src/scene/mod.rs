@@ -64,6 +64,9 @@ pub struct Scene {
     pub images: Arc<Vec<Image>>,
     /// Every light; emissive triangles point into this list.
     pub lights: Vec<Light>,
+    /// The environment light's index in `lights`, if there is one: what rays that leave the
+    /// scene see.
+    pub environment: Option<u32>,
     /// Centre of the bounding sphere of everything.
     pub center: Vec3A,
     /// Radius of that sphere (sizes directional lights' power).

@@ -103,6 +103,7 @@ const EVERYTHING_RON: &str = r#"Scene(
              fill: 0.25, emission: Power(watts: 45, color: (1, 1, 1)),
              color_jitter: 0.15, decades: 2, seed: 7, two_sided: false),
     ],
+    environment: Map(path: "sky.exr", scale: 0.5, rotate_deg: 30),
 )"#;
 
 /// The real files every case starts from.
@@ -127,7 +128,11 @@ fn inputs() -> Vec<Input> {
         Input { name: "scene.gltf", bytes: data("tests/data/cornell/cornell-striped.gltf"), beside: vec![] },
         Input { name: "scene.glb", bytes: data("tests/data/blender/panels.glb"), beside: vec![] },
         Input { name: "scene.glb", bytes: data("tests/data/blender/punctual.glb"), beside: vec![] },
-        Input { name: "scene.ron", bytes: EVERYTHING_RON.as_bytes().to_vec(), beside: vec![obj.clone(), mtl.clone()] },
+        Input {
+            name: "scene.ron",
+            bytes: EVERYTHING_RON.as_bytes().to_vec(),
+            beside: vec![obj.clone(), mtl.clone(), ("sky.exr", exr.clone())],
+        },
         Input { name: "scene.ron", bytes: data("tests/data/cornell/cornell.ron"), beside: vec![] },
         Input { name: "scene.obj", bytes: obj.1.clone(), beside: vec![mtl.clone()] },
         Input { name: "scene.mtl", bytes: mtl.1.clone(), beside: vec![obj.clone()] },

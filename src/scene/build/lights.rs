@@ -2,7 +2,7 @@
 
 use super::validate::{check_color, check_point};
 use crate::error::{Error, Result};
-use crate::light::{AreaEmission, DistantLight, Light, PointLight, QuadLight, SpotLight};
+use crate::light::{AreaEmission, DistantLight, EnvironmentLight, Light, PointLight, QuadLight, SpotLight};
 use crate::limits::MAX_POWER;
 use crate::scene::description::LightDesc;
 
@@ -58,6 +58,18 @@ pub(super) fn light(file: &str, i: usize, desc: &LightDesc) -> Result<Light> {
         }
     };
     check_power(file, &what, &light, 0.0)?;
+    Ok(light)
+}
+
+/// The environment, checked: a non-negative finite radiance (or map factor) and a power
+/// myriad can hold over the scene's disc of `scene_radius`.
+pub(super) fn environment(file: &str, name: &str, env: &EnvironmentLight, scene_radius: f32) -> Result<Light> {
+    check_color(file, name, "radiance", env.radiance, None)?;
+    if !env.rotation.is_finite() {
+        return Err(Error::scene(file, name, format!("rotation {} is not finite", env.rotation)));
+    }
+    let light = Light::Environment(env.clone());
+    check_power(file, name, &light, scene_radius)?;
     Ok(light)
 }
 

@@ -213,6 +213,14 @@ pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
             lights::check_power(file, &format!("light {i} '{name}'"), &lights[listed + i], radius)?;
         }
     }
+    let environment = match &desc.environment {
+        Some((name, env)) => {
+            let light = lights::environment(file, name, env, radius)?;
+            lights.push(light);
+            Some((lights.len() - 1) as u32)
+        }
+        None => None,
+    };
 
     let (camera, camera_name) = match cam_desc {
         Some(c) => (scene_camera(file, c, resolution)?, c.name.clone()),
@@ -237,6 +245,7 @@ pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
         materials,
         images,
         lights,
+        environment,
         center,
         radius,
         render: desc.render,
