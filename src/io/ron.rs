@@ -14,7 +14,7 @@ use ::ron::extensions::Extensions;
 
 use super::LoadOptions;
 use crate::error::{Error, Result};
-use crate::light::EnvironmentLight;
+use crate::light::{EnvironmentLight, SpotCurve};
 use crate::material::Material;
 use crate::math::{Mat4, Rgb, UVec2, Vec3A};
 use crate::scene::MAX_RESOLUTION;
@@ -256,6 +256,7 @@ fn compile(file: SceneFile, source: &str, base_dir: &Path, options: &LoadOptions
                     intensity: v3(*intensity),
                     inner_angle: inner_deg.to_radians(),
                     outer_angle: outer_deg.to_radians(),
+                    curve: SpotCurve::Quadratic,
                 })
             }
             LightSpec::Directional { direction, irradiance } => desc.lights.push(LightDesc::Directional {

@@ -426,6 +426,7 @@ mod tests {
             intensity: Rgb::ONE,
             cos_inner: 20f32.to_radians().cos(),
             cos_outer: 30f32.to_radians().cos(),
+            curve: Default::default(),
         });
         let v = s.bounds();
         for deg in [0.0f32, 10.0, 19.0, 25.0, 29.5] {

@@ -22,7 +22,7 @@ pub use distant::DistantLight;
 pub use environment::{EnvironmentLight, EnvironmentMap};
 pub use point::PointLight;
 pub use quad::QuadLight;
-pub use spot::SpotLight;
+pub use spot::{SpotCurve, SpotLight};
 pub use triangle::{EmissionTexture, TriangleLight};
 
 use crate::math::{Rgb, Vec2, Vec3A};

@@ -1,11 +1,21 @@
-//! Spot light with the KHR_lights_punctual cone falloff.
-//!
-//! Between the inner and outer cone the intensity follows the specification's reference:
-//! `a = clamp((cosθ − cos_outer) / max(1e-3, cos_inner − cos_outer), 0, 1)`, attenuation `a²`.
+//! Spot light: full intensity inside an inner cone, none outside an outer one, and between
+//! them a curve of `t = clamp((cosθ − cos_outer) / max(1e-3, cos_inner − cos_outer), 0, 1)`:
+//! `t²` as the KHR_lights_punctual reference has it, or Blender's smoothstep `t²(3 − 2t)`,
+//! where Cycles' blend puts the inner cosine at `cos_outer + (1 − cos_outer)·blend`.
 
 use super::LightSample;
 use crate::math::{Rgb, Vec3A, luminance};
 use std::f32::consts::PI;
+
+/// How a spot light fades between its inner and outer cones.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum SpotCurve {
+    /// `t²`, KHR_lights_punctual's reference falloff.
+    #[default]
+    Quadratic,
+    /// `t²(3 − 2t)`, Blender's (Cycles') spot blend.
+    Smoothstep,
+}
 
 /// A spot light of on-axis radiant intensity `intensity` [W/sr].
 #[derive(Clone, Debug)]
@@ -20,6 +30,8 @@ pub struct SpotLight {
     pub cos_inner: f32,
     /// Cosine of the outer cone half-angle (dark outside).
     pub cos_outer: f32,
+    /// The fade between the cones.
+    pub curve: SpotCurve,
 }
 
 impl SpotLight {
@@ -27,8 +39,11 @@ impl SpotLight {
     #[inline]
     pub fn falloff(&self, cos_theta: f32) -> f32 {
         let scale = 1.0 / (self.cos_inner - self.cos_outer).max(1e-3);
-        let a = ((cos_theta - self.cos_outer) * scale).clamp(0.0, 1.0);
-        a * a
+        let t = ((cos_theta - self.cos_outer) * scale).clamp(0.0, 1.0);
+        match self.curve {
+            SpotCurve::Quadratic => t * t,
+            SpotCurve::Smoothstep => t * t * (3.0 - 2.0 * t),
+        }
     }
 
     /// The (delta) sample seen from `p`; `None` outside the cone.
@@ -58,5 +73,27 @@ impl SpotLight {
     /// Power estimate 2π·Y(I)·(1 − (cos_inner + cos_outer)/2) (pbrt-v4's approximation).
     pub fn power(&self) -> f32 {
         2.0 * PI * luminance(self.intensity) * (1.0 - 0.5 * (self.cos_inner + self.cos_outer))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn both_curves_fade_from_the_outer_to_the_inner_cone() {
+        let spot = |curve| SpotLight {
+            position: Vec3A::ZERO,
+            direction: Vec3A::NEG_Y,
+            intensity: Rgb::ONE,
+            cos_inner: 0.9,
+            cos_outer: 0.7,
+            curve,
+        };
+        let (q, s) = (spot(SpotCurve::Quadratic), spot(SpotCurve::Smoothstep));
+        for c in [1.0, 0.9, 0.7, 0.5] {
+            assert_eq!(q.falloff(c), s.falloff(c), "cos {c}");
+        }
+        assert!((q.falloff(0.8) - 0.25).abs() < 1e-6 && (s.falloff(0.8) - 0.5).abs() < 1e-6);
     }
 }

@@ -8,7 +8,7 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use crate::light::EnvironmentLight;
+use crate::light::{EnvironmentLight, SpotCurve};
 use crate::light_sampler::LightSamplerKind;
 use crate::material::{Image, Material};
 use crate::math::{Mat4, Rgb, UVec2, Vec2, Vec3A};
@@ -142,6 +142,8 @@ pub enum LightDesc {
         inner_angle: f32,
         /// Outer cone half-angle, radians.
         outer_angle: f32,
+        /// The fade between the cones.
+        curve: SpotCurve,
     },
     /// Directional light.
     Directional {
@@ -187,14 +189,17 @@ impl LightDesc {
             LightDesc::Point { name, position, intensity } => {
                 LightDesc::Point { name: name.clone(), position: m.transform_point3a(*position), intensity: *intensity }
             }
-            LightDesc::Spot { name, position, direction, intensity, inner_angle, outer_angle } => LightDesc::Spot {
-                name: name.clone(),
-                position: m.transform_point3a(*position),
-                direction: dir(direction),
-                intensity: *intensity,
-                inner_angle: *inner_angle,
-                outer_angle: *outer_angle,
-            },
+            LightDesc::Spot { name, position, direction, intensity, inner_angle, outer_angle, curve } => {
+                LightDesc::Spot {
+                    name: name.clone(),
+                    position: m.transform_point3a(*position),
+                    direction: dir(direction),
+                    intensity: *intensity,
+                    inner_angle: *inner_angle,
+                    outer_angle: *outer_angle,
+                    curve: *curve,
+                }
+            }
             LightDesc::Directional { name, direction, irradiance } => {
                 LightDesc::Directional { name: name.clone(), direction: dir(direction), irradiance: *irradiance }
             }

@@ -40,6 +40,7 @@ pub fn mixed_lights(n: usize) -> Vec<Light> {
                     intensity: Rgb::splat(power),
                     cos_inner: 0.9,
                     cos_outer: 0.7,
+                    curve: Default::default(),
                 }),
                 _ if i == 5 => Light::Distant(DistantLight {
                     direction: Vec3A::new(0.3, -1.0, 0.2).normalize(),

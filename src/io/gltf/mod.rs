@@ -27,6 +27,7 @@ use gltf::texture::{MagFilter, WrappingMode};
 use super::LoadOptions;
 use super::image_file::from_rgba8;
 use crate::error::{Error, Result};
+use crate::light::SpotCurve;
 use crate::material::texture::{UvTransform, Wrap};
 use crate::material::{Image, Material, TextureRef};
 use crate::math::{Mat4, Rgb, Vec2, Vec3A};
@@ -51,9 +52,11 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<SceneDescription> {
         blob: raw.blob,
     };
     let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob.clone()).map_err(|e| buffer_error(&file, e))?;
+    let generator = gltf.document.as_json().asset.generator.as_deref().unwrap_or("");
     let mut loader = Loader {
         file: &file,
         buffers: &buffers,
+        blender: generator.starts_with(BLENDER_GENERATOR),
         desc: SceneDescription {
             source: file.clone(),
             inputs: std::iter::once(path.to_path_buf()).chain(external).collect(),
@@ -120,6 +123,20 @@ struct Loader<'a> {
     file: &'a str,
     buffers: &'a [gltf::buffer::Data],
     desc: SceneDescription,
+    /// Written by Blender's exporter: rendered as Cycles renders it after import.
+    blender: bool,
+}
+
+/// The `asset.generator` Blender's glTF exporter writes (followed by its version).
+const BLENDER_GENERATOR: &str = "Khronos glTF Blender I/O";
+
+/// A Blender spot's full-intensity half-angle, from the cones its exporter wrote (outer =
+/// spot size / 2, inner = outer·(1 − blend)): Cycles fades by a smoothstep from cos(outer)
+/// up to cos(outer) + (1 − cos(outer))·blend.
+fn blender_spot_inner(inner: f32, outer: f32) -> f32 {
+    let blend = if outer > 0.0 { (1.0 - inner / outer).clamp(0.0, 1.0) } else { 0.0 };
+    let cos_outer = outer.cos();
+    (cos_outer + (1.0 - cos_outer) * blend).clamp(-1.0, 1.0).acos()
 }
 
 /// The glTF-to-myriad index of each image (None: failed to load).
@@ -405,14 +422,22 @@ impl Loader<'_> {
                     gltf::khr_lights_punctual::Kind::Point => {
                         LightDesc::Point { name: label, position, intensity: power }
                     }
-                    gltf::khr_lights_punctual::Kind::Spot { inner_cone_angle, outer_cone_angle } => LightDesc::Spot {
-                        name: label,
-                        position,
-                        direction,
-                        intensity: power,
-                        inner_angle: inner_cone_angle,
-                        outer_angle: outer_cone_angle,
-                    },
+                    gltf::khr_lights_punctual::Kind::Spot { inner_cone_angle, outer_cone_angle } => {
+                        let (inner_angle, curve) = if self.blender {
+                            (blender_spot_inner(inner_cone_angle, outer_cone_angle), SpotCurve::Smoothstep)
+                        } else {
+                            (inner_cone_angle, SpotCurve::Quadratic)
+                        };
+                        LightDesc::Spot {
+                            name: label,
+                            position,
+                            direction,
+                            intensity: power,
+                            inner_angle,
+                            outer_angle: outer_cone_angle,
+                            curve,
+                        }
+                    }
                     gltf::khr_lights_punctual::Kind::Directional => {
                         LightDesc::Directional { name: label, direction, irradiance: power }
                     }
@@ -470,4 +495,20 @@ fn to_image(name: String, data: gltf::image::Data) -> Image {
         })
         .collect();
     from_rgba8(name, data.width, data.height, rgba)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_blender_spot_fades_over_its_blend_fraction_of_the_cosine() {
+        // Blend 0 (inner = outer): a hard edge. Blend 1 (inner = 0): the fade spans from the
+        // outer cone to the axis. Blend 0.3 of a 40° cone: as Cycles, in cosines.
+        assert!((blender_spot_inner(0.5, 0.5) - 0.5).abs() < 1e-5);
+        assert!(blender_spot_inner(0.0, 0.5) < 1e-3);
+        let (outer, blend) = (20f32.to_radians(), 0.3);
+        let inner = blender_spot_inner(outer * (1.0 - blend), outer);
+        assert!((inner.cos() - (outer.cos() + (1.0 - outer.cos()) * blend)).abs() < 1e-6);
+    }
 }

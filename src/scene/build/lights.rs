@@ -19,7 +19,7 @@ pub(super) fn light(file: &str, i: usize, desc: &LightDesc) -> Result<Light> {
             check_color(file, &what, "intensity", *intensity, None)?;
             Light::Point(PointLight { position: *position, intensity: *intensity })
         }
-        LightDesc::Spot { position, direction: d, intensity, inner_angle, outer_angle, .. } => {
+        LightDesc::Spot { position, direction: d, intensity, inner_angle, outer_angle, curve, .. } => {
             check_point(file, &what, "position", *position)?;
             check_color(file, &what, "intensity", *intensity, None)?;
             let direction = direction(*d)?;
@@ -40,6 +40,7 @@ pub(super) fn light(file: &str, i: usize, desc: &LightDesc) -> Result<Light> {
                 intensity: *intensity,
                 cos_inner: inner_angle.cos(),
                 cos_outer: outer_angle.cos(),
+                curve: *curve,
             })
         }
         LightDesc::Directional { direction: d, irradiance, .. } => {
