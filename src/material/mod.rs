@@ -9,8 +9,10 @@
 //! metallic-roughness}; a conductor is metallic = 1 and there is no transmission yet.
 
 mod diffuse;
+pub mod fresnel;
 mod metal_rough;
 mod microfacet;
+pub mod tables;
 pub mod texture;
 
 pub use diffuse::Diffuse;

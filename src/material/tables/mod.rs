@@ -1,0 +1,190 @@
+//! Tables of GGX integrals that Cycles' Principled BSDF relies on, as myriad computes them:
+//! the directional albedo E(r, μ) of a white GGX lobe and its cosine-weighted average Ē(r),
+//! for multiple-scattering energy compensation (Kulla & Conty 2017), and the average Fresnel
+//! weight s(r, μ, z) of a dielectric, for the albedo a specular layer takes from what lies
+//! under it.
+//!
+//! Owns: the integrands ([`ggx_albedo`], [`ggx_albedo_average`], [`fresnel_weight_average`]),
+//! the grids (Cycles' layout: node i of n at i/(n−1), roughness fastest, the lowest node moved
+//! to 1e-4 and z's highest to 0.99) and multilinear lookups. The numbers live in `data.rs`,
+//! written by `cargo run --release --example ggx_tables` (a stratified 2D quadrature of the
+//! visible-normal distribution per node, 512² points, 256² for s); a test recomputes some
+//! nodes and compares.
+
+mod data;
+
+use rayon::prelude::*;
+
+use super::fresnel;
+use super::microfacet::Ggx;
+use crate::math::{Vec2, Vec3A};
+
+/// Nodes per axis of the E table (roughness × cos θo).
+pub const E_NODES: usize = 32;
+/// Nodes per axis of the s table (roughness × cos θo × z).
+pub const S_NODES: usize = 16;
+
+/// Node `i` of `n` on [0, 1], moved into [lo, hi].
+fn node(i: usize, n: usize, lo: f32, hi: f32) -> f32 {
+    (i as f32 / (n - 1) as f32).clamp(lo, hi)
+}
+
+/// The outgoing direction at cos θo = `mu`.
+fn outgoing(mu: f32) -> Vec3A {
+    Vec3A::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu)
+}
+
+/// The mean of `f(wo, h, wi)` over reflections of `wo` about `n × n` stratified visible
+/// normals of roughness `rough` (0 for those below the horizon).
+fn visible_normal_mean(rough: f32, mu: f32, n: usize, f: impl Fn(&Ggx, Vec3A, Vec3A, Vec3A) -> f64) -> f64 {
+    let ggx = Ggx::from_roughness(rough);
+    let wo = outgoing(mu);
+    let mut sum = 0.0;
+    for a in 0..n {
+        for b in 0..n {
+            let u = Vec2::new((a as f32 + 0.5) / n as f32, (b as f32 + 0.5) / n as f32);
+            let h = ggx.sample_visible_normal(wo, u);
+            let wi = 2.0 * wo.dot(h) * h - wo;
+            if wi.z > 0.0 {
+                sum += f(&ggx, wo, h, wi);
+            }
+        }
+    }
+    sum / (n * n) as f64
+}
+
+/// Directional albedo of a white GGX reflection lobe, ∫ D·G2/(4μo) dωi = E_vndf[G2/G1].
+pub fn ggx_albedo(rough: f32, mu: f32, n: usize) -> f64 {
+    visible_normal_mean(rough, mu, n, |g, wo, _, wi| (g.g2(wo, wi) / g.g1(wo)) as f64)
+}
+
+/// ∫₀¹ 2μ·E(r, μ) dμ by the midpoint rule over `steps` cosines.
+pub fn ggx_albedo_average(rough: f32, steps: usize, n: usize) -> f64 {
+    (0..steps)
+        .map(|k| {
+            let mu = (k as f32 + 0.5) / steps as f32;
+            2.0 * mu as f64 * ggx_albedo(rough, mu, n) / steps as f64
+        })
+        .sum()
+}
+
+/// The IOR at z = F0(η)^¼, the s table's third axis.
+pub fn ior_of_z(z: f32) -> f32 {
+    fresnel::ior_from_f0(z.powi(4))
+}
+
+/// The average over visible normals of how far the exact dielectric Fresnel has gone from
+/// F0 to 1: saturate((F(wo·h, η) − F0(η)) / (1 − F0(η))), η = [`ior_of_z`]`(z)`.
+pub fn fresnel_weight_average(rough: f32, mu: f32, z: f32, n: usize) -> f64 {
+    let eta = ior_of_z(z);
+    let f0 = fresnel::f0_from_ior(eta);
+    visible_normal_mean(rough, mu, n, |_, wo, h, _| {
+        ((fresnel::dielectric(wo.dot(h), eta) - f0) / (1.0 - f0)).clamp(0.0, 1.0) as f64
+    })
+}
+
+/// The tables, computed (what the generator writes): E, Ē and s.
+pub fn compute(n: usize) -> (Vec<f32>, Vec<f32>, Vec<f32>) {
+    let e: Vec<f32> = (0..E_NODES * E_NODES)
+        .into_par_iter()
+        .map(|k| {
+            let (r, m) = (node(k % E_NODES, E_NODES, 1e-4, 1.0), node(k / E_NODES, E_NODES, 1e-4, 1.0));
+            ggx_albedo(r, m, n) as f32
+        })
+        .collect();
+    let e_avg: Vec<f32> =
+        (0..E_NODES).into_par_iter().map(|k| ggx_albedo_average(node(k, E_NODES, 1e-4, 1.0), 64, n) as f32).collect();
+    let s: Vec<f32> = (0..S_NODES * S_NODES * S_NODES)
+        .into_par_iter()
+        .map(|k| {
+            let r = node(k % S_NODES, S_NODES, 1e-4, 1.0);
+            let m = node(k / S_NODES % S_NODES, S_NODES, 1e-4, 1.0);
+            let z = node(k / (S_NODES * S_NODES), S_NODES, 1e-4, 0.99);
+            fresnel_weight_average(r, m, z, n / 2) as f32
+        })
+        .collect();
+    (e, e_avg, s)
+}
+
+/// Linear interpolation weights of `x ∈ [0,1]` on `n` nodes: (lower node, fraction).
+#[inline]
+fn position(x: f32, n: usize) -> (usize, f32) {
+    let f = x.clamp(0.0, 1.0) * (n - 1) as f32;
+    let i = (f as usize).min(n - 2);
+    (i, f - i as f32)
+}
+
+/// Bilinear lookup in a table of `n × n` (x fastest).
+#[inline]
+fn lookup2(table: &[f32], n: usize, x: f32, y: f32) -> f32 {
+    let ((i, fx), (j, fy)) = (position(x, n), position(y, n));
+    let at = |a: usize, b: usize| table[b * n + a];
+    let lo = at(i, j) + (at(i + 1, j) - at(i, j)) * fx;
+    let hi = at(i, j + 1) + (at(i + 1, j + 1) - at(i, j + 1)) * fx;
+    lo + (hi - lo) * fy
+}
+
+/// Directional albedo E(r, μ) of a white GGX lobe of perceptual roughness `rough`.
+#[inline]
+pub fn albedo(rough: f32, mu: f32) -> f32 {
+    lookup2(&data::GGX_E, E_NODES, rough, mu)
+}
+
+/// Ē(r), the cosine-weighted average of [`albedo`].
+#[inline]
+pub fn albedo_average(rough: f32) -> f32 {
+    let (i, f) = position(rough, E_NODES);
+    data::GGX_E_AVG[i] + (data::GGX_E_AVG[i + 1] - data::GGX_E_AVG[i]) * f
+}
+
+/// s(r, μ, z): the average Fresnel weight of a dielectric lobe (z = F0(η)^¼).
+#[inline]
+pub fn fresnel_weight(rough: f32, mu: f32, z: f32) -> f32 {
+    let (k, fz) = position(z, S_NODES);
+    let plane = |k: usize| lookup2(&data::GGX_GEN_SCHLICK_IOR_S[k * S_NODES * S_NODES..], S_NODES, rough, mu);
+    let (a, b) = (plane(k), plane(k + 1));
+    a + (b - a) * fz
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_tables_hold_what_their_integrands_give() {
+        // A few nodes recomputed with fewer samples than the generator used.
+        for (ri, mi) in [(0, 31), (5, 3), (16, 16), (31, 1), (31, 31), (10, 25)] {
+            let (r, m) = (node(ri, E_NODES, 1e-4, 1.0), node(mi, E_NODES, 1e-4, 1.0));
+            let stored = data::GGX_E[mi * E_NODES + ri];
+            assert!((ggx_albedo(r, m, 128) as f32 - stored).abs() < 2e-3, "E({r}, {m}) = {stored}");
+        }
+        for ri in [0, 7, 20, 31] {
+            let r = node(ri, E_NODES, 1e-4, 1.0);
+            // The grid's error near grazing angles is a few 1e-3 at 128² (1e-3 at 512²).
+            let recomputed = ggx_albedo_average(r, 64, 128) as f32;
+            assert!(
+                (recomputed - data::GGX_E_AVG[ri]).abs() < 5e-3,
+                "Ē({r}) = {} vs {recomputed}",
+                data::GGX_E_AVG[ri]
+            );
+        }
+        for (ri, mi, zi) in [(0, 15, 3), (8, 4, 8), (15, 15, 15), (3, 1, 0)] {
+            let (r, m, z) = (node(ri, S_NODES, 1e-4, 1.0), node(mi, S_NODES, 1e-4, 1.0), node(zi, S_NODES, 1e-4, 0.99));
+            let stored = data::GGX_GEN_SCHLICK_IOR_S[(zi * S_NODES + mi) * S_NODES + ri];
+            assert!((fresnel_weight_average(r, m, z, 96) as f32 - stored).abs() < 3e-3, "s({r}, {m}, {z}) = {stored}");
+        }
+    }
+
+    #[test]
+    fn a_white_lobe_keeps_what_a_brute_force_integral_gives() {
+        // ∫ D·G2/(4μo) dωi by a 200 × 400 midpoint sum over the hemisphere of ωi (done once,
+        // outside): a mirror keeps everything; roughness 1 loses most at normal incidence.
+        assert!(albedo(0.0, 1.0) > 0.99 && albedo(0.0, 0.5) > 0.99);
+        assert!((albedo(1.0, 1.0) - 0.3069).abs() < 2e-3, "{}", albedo(1.0, 1.0));
+        assert!((albedo(1.0, 0.5) - 0.4507).abs() < 5e-3, "{}", albedo(1.0, 0.5));
+        assert!((albedo(0.5, 0.5) - 0.8573).abs() < 5e-3, "{}", albedo(0.5, 0.5));
+        assert!(albedo_average(1.0) < albedo_average(0.5) && albedo_average(0.0) > 0.99);
+        // The Fresnel weight rises towards grazing and with roughness at normal incidence.
+        assert!(fresnel_weight(0.0, 1.0, 0.45) < 1e-3 && fresnel_weight(0.0, 0.05, 0.45) > 0.4);
+    }
+}
