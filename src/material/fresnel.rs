@@ -95,15 +95,16 @@ mod tests {
         // Total internal reflection from inside glass past the critical angle.
         assert_eq!(dielectric(0.5, 1.0 / 1.5), 1.0);
         assert!((dielectric(0.0, 1.5) - 1.0).abs() < 1e-6);
-        // The average against a fine midpoint sum.
-        for eta in [1.2f32, 1.5, 2.0, 1.0 / 1.5] {
+        // The fit against a fine midpoint sum: within 7e-3 (2.5 % at η = 1.5; Cycles uses it
+        // as it is).
+        for eta in [1.2f32, 1.5, 2.0, 3.0, 1.0 / 1.5] {
             let n = 20_000;
             let sum: f64 = (0..n)
                 .map(|i| (i as f64 + 0.5) / n as f64)
                 .map(|m| 2.0 * m * dielectric(m as f32, eta) as f64 / n as f64)
                 .sum();
             assert!(
-                (sum - dielectric_average(eta) as f64).abs() < 3e-3,
+                (sum - dielectric_average(eta) as f64).abs() < 7e-3,
                 "eta {eta}: {sum} vs fit {}",
                 dielectric_average(eta)
             );

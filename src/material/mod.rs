@@ -5,19 +5,20 @@
 //! and [`ShadingPoint`] (a BSDF with its world frame: the face-forwarding and the
 //! geometric-normal test that stop light leaking through surfaces). Depends on `math`.
 //!
-//! Deviation from the architecture sketch: the closed set is {Lambertian, glTF
-//! metallic-roughness}; a conductor is metallic = 1 and there is no transmission yet.
+//! Deviation from the architecture sketch: the closed set is {Lambertian, Principled} (the
+//! Principled BSDF as Cycles evaluates it for a glTF material: `principled.rs`); a conductor
+//! is metallic = 1 and there is no transmission yet.
 
 mod diffuse;
 pub mod fresnel;
-mod metal_rough;
 mod microfacet;
+mod principled;
 pub mod tables;
 pub mod texture;
 
 pub use diffuse::Diffuse;
-pub use metal_rough::MetalRough;
 pub use microfacet::Ggx;
+pub use principled::Principled;
 pub use texture::{Image, TextureRef};
 
 use crate::math::frame::Frame;
@@ -39,8 +40,8 @@ pub struct BsdfSample {
 pub enum Bsdf {
     /// Lambertian.
     Diffuse(Diffuse),
-    /// glTF metallic-roughness.
-    MetalRough(MetalRough),
+    /// Cycles' Principled BSDF (metal, dielectric specular over diffuse).
+    Principled(Principled),
 }
 
 impl Bsdf {
@@ -49,7 +50,7 @@ impl Bsdf {
     pub fn eval(&self, wo: Vec3A, wi: Vec3A) -> Rgb {
         match self {
             Bsdf::Diffuse(b) => b.eval(wo, wi),
-            Bsdf::MetalRough(b) => b.eval(wo, wi),
+            Bsdf::Principled(b) => b.eval(wo, wi),
         }
     }
 
@@ -58,7 +59,7 @@ impl Bsdf {
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
         match self {
             Bsdf::Diffuse(b) => b.pdf(wo, wi),
-            Bsdf::MetalRough(b) => b.pdf(wo, wi),
+            Bsdf::Principled(b) => b.pdf(wo, wi),
         }
     }
 
@@ -67,7 +68,7 @@ impl Bsdf {
     pub fn sample(&self, wo: Vec3A, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         match self {
             Bsdf::Diffuse(b) => b.sample(wo, u),
-            Bsdf::MetalRough(b) => b.sample(wo, u_lobe, u),
+            Bsdf::Principled(b) => b.sample(wo, u_lobe, u),
         }
     }
 }
@@ -85,8 +86,14 @@ pub struct Material {
     pub metallic: f32,
     /// Perceptual roughness in [0,1].
     pub roughness: f32,
-    /// KHR_materials_specular `specularFactor` in [0,1] (1 when absent in glTF).
+    /// KHR_materials_specular `specularFactor` in [0,1] (1 when absent in glTF): scales the
+    /// dielectric's F0 (Blender's Specular IOR Level × 2).
     pub specular: f32,
+    /// KHR_materials_specular `specularColorFactor` (≥ 0; Blender's Specular Tint), which
+    /// colours the dielectric's F0 and the metal's 82° reflectance.
+    pub specular_color: Rgb,
+    /// Index of refraction of the dielectric (KHR_materials_ior, 1.5 by default), > 1.
+    pub ior: f32,
     /// Emitted radiance (emissiveFactor × emissiveStrength), W/(m²·sr).
     pub emission: Rgb,
     /// Emits on both sides (glTF `doubleSided`); otherwise only on the counter-clockwise side.
@@ -113,6 +120,8 @@ impl Material {
             metallic: 0.0,
             roughness: 1.0,
             specular: 0.0,
+            specular_color: Rgb::ONE,
+            ior: 1.5,
             emission: Rgb::ZERO,
             double_sided: true,
             base_color_texture: None,
@@ -183,7 +192,7 @@ impl Material {
             }
             return Some(Bsdf::Diffuse(Diffuse { albedo: base }));
         }
-        Some(Bsdf::MetalRough(MetalRough::new(base, metallic, roughness, self.specular)))
+        Some(Bsdf::Principled(Principled::new(base, metallic, roughness, self.ior, self.specular, self.specular_color)))
     }
 }
 

@@ -92,6 +92,10 @@ pub enum CameraSpec {
     },
 }
 
+fn default_ior() -> f32 {
+    1.5
+}
+
 fn default_up() -> V3 {
     [0.0, 1.0, 0.0]
 }
@@ -127,7 +131,8 @@ pub enum MaterialSpec {
         /// Reflectance per channel, in [0,1].
         albedo: V3,
     },
-    /// glTF metallic-roughness (GGX with Schlick Fresnel).
+    /// glTF metallic-roughness, rendered as Cycles' Principled BSDF renders it (GGX with
+    /// multiple-scattering compensation; exact dielectric Fresnel; F82-tint metals).
     MetalRough {
         /// Base colour.
         base_color: V3,
@@ -137,9 +142,12 @@ pub enum MaterialSpec {
         /// Perceptual roughness in [0,1] (alpha = roughness²).
         #[serde(default = "one")]
         roughness: f32,
-        /// KHR_materials_specular `specularFactor` (default 1).
+        /// KHR_materials_specular `specularFactor` (default 1; 0 makes a dielectric Lambertian).
         #[serde(default = "one")]
         specular: f32,
+        /// Index of refraction of the dielectric (default 1.5).
+        #[serde(default = "default_ior")]
+        ior: f32,
     },
     /// A light-emitting surface (diffuse emission).
     Emissive {

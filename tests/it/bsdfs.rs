@@ -1,21 +1,30 @@
-//! BSDF tests: eval/pdf/sample agreement, reciprocity, energy conservation, a chi-square
+//! BSDF tests: eval/pdf/sample agreement, reciprocity (where the model has it), energy (no
+//! gain; a white metal keeps what multiple-scattering compensation promises), a chi-square
 //! test of sampled directions against the pdf (Mitsuba's `chi2` recipe), and the sampled
 //! weights against the numerically integrated `eval`, which ties sampling to the BSDF itself
 //! rather than to its own pdf.
 
 use crate::common::{chi_square, sidak};
-use myriad::material::{Bsdf, Diffuse, MetalRough};
+use myriad::material::{Bsdf, Diffuse, Material, Principled};
 use myriad::math::{Rgb, Vec2, Vec3A};
 use myriad::sampling::{Dim, SampleStream};
 use std::f64::consts::PI;
 
+/// A Principled BSDF of base, metallic, roughness, IOR, specular factor and colour.
+fn principled(base: Rgb, metallic: f32, roughness: f32, ior: f32, specular: f32, color: Rgb) -> Bsdf {
+    Bsdf::Principled(Principled::new(base, metallic, roughness, ior, specular, color))
+}
+
 fn bsdfs() -> Vec<(&'static str, Bsdf)> {
+    let tint = Rgb::new(1.0, 0.7, 0.4);
     vec![
         ("lambert", Bsdf::Diffuse(Diffuse { albedo: Rgb::new(0.8, 0.5, 0.2) })),
-        ("plastic r0.3", Bsdf::MetalRough(MetalRough::new(Rgb::new(0.8, 0.2, 0.2), 0.0, 0.3, 1.0))),
-        ("plastic r0.7", Bsdf::MetalRough(MetalRough::new(Rgb::new(0.3, 0.6, 0.9), 0.0, 0.7, 0.5))),
-        ("metal r0.3", Bsdf::MetalRough(MetalRough::new(Rgb::new(0.95, 0.64, 0.54), 1.0, 0.3, 1.0))),
-        ("half-metal r1", Bsdf::MetalRough(MetalRough::new(Rgb::ONE, 0.5, 1.0, 1.0))),
+        ("plastic r0.3", principled(Rgb::new(0.8, 0.2, 0.2), 0.0, 0.3, 1.5, 1.0, Rgb::ONE)),
+        ("plastic r0.7 ior 1.45 half specular", principled(Rgb::new(0.3, 0.6, 0.9), 0.0, 0.7, 1.45, 0.5, Rgb::ONE)),
+        ("plastic r0.3 tinted specular ×2", principled(Rgb::new(0.5, 0.5, 0.5), 0.0, 0.3, 1.5, 1.0, 2.0 * tint)),
+        ("metal r0.3", principled(Rgb::new(0.95, 0.64, 0.54), 1.0, 0.3, 1.5, 1.0, Rgb::ONE)),
+        ("metal r0.6 82° tint", principled(Rgb::new(0.9, 0.8, 0.3), 1.0, 0.6, 1.5, 1.0, tint)),
+        ("half-metal r1", principled(Rgb::ONE, 0.5, 1.0, 1.5, 1.0, Rgb::ONE)),
     ]
 }
 
@@ -57,21 +66,27 @@ fn sample_weight_and_pdf_agree_with_eval() {
 }
 
 #[test]
-fn metal_rough_without_metal_or_specular_is_exactly_lambertian() {
+fn a_dielectric_without_specular_is_exactly_lambertian() {
     let base = Rgb::new(0.73, 0.5, 0.1);
-    let a = MetalRough::new(base, 0.0, 0.4, 0.0);
+    let material = Material { roughness: 0.4, ..Material::diffuse("m", base) };
+    assert!(matches!(material.bsdf(Vec2::ZERO, &[]), Some(Bsdf::Diffuse(d)) if d.albedo == base));
+    // And the Principled model itself at specular 0 has no layer on its base.
+    let a = principled(base, 0.0, 0.4, 1.5, 0.0, Rgb::ONE);
     let d = Diffuse { albedo: base };
     for i in 0..100 {
         let (_, u) = u2(i, 2);
         let wi = myriad::math::warp::square_to_cosine_hemisphere(u);
         let wo = wo_at(0.3 + 0.007 * i as f32);
-        assert_eq!(a.eval(wo, wi), d.eval(wo, wi));
+        assert!((a.eval(wo, wi) - d.eval(wo, wi)).abs().max_element() < 1e-6);
     }
 }
 
 #[test]
-fn eval_is_reciprocal() {
-    for (name, b) in bsdfs() {
+fn eval_is_reciprocal_where_the_model_is() {
+    // Cycles' Principled BSDF scales its lobes by functions of the outgoing angle alone
+    // (multiple-scattering compensation, the base's layering), so it is not reciprocal;
+    // Lambert is.
+    for (name, b) in bsdfs().into_iter().filter(|(_, b)| matches!(b, Bsdf::Diffuse(_))) {
         for i in 0..200 {
             let (_, u) = u2(i, 3);
             let (_, v) = u2(i, 4);
@@ -83,29 +98,47 @@ fn eval_is_reciprocal() {
     }
 }
 
+/// Directional albedo E[weight] of `b` at `wo` (max channel) and its standard error.
+fn albedo(b: &Bsdf, wo: Vec3A) -> (f64, f64) {
+    let n = 40_000;
+    let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+    for i in 0..n {
+        let (ul, u) = u2(i, 5);
+        let w = b.sample(wo, ul, u).map_or(0.0, |s| s.weight.max_element() as f64);
+        sum += w;
+        sum2 += w * w;
+    }
+    let mean = sum / n as f64;
+    (mean, ((sum2 / n as f64 - mean * mean) / n as f64).sqrt())
+}
+
 #[test]
-fn albedo_never_exceeds_one() {
-    // White versions of every lobe mix: E[weight] ≤ 1 within 4 standard errors.
+fn a_white_metal_keeps_its_energy_and_nothing_gains_any() {
+    // Multiple-scattering compensation gives a white conductor back what single scattering
+    // loses: it keeps 99 % or more at any roughness and angle (uncompensated GGX at roughness
+    // 1 keeps 31 % at normal incidence). White plastics stay at or below 1, except that
+    // Cycles' layering (the base loses the specular layer's *estimated* albedo, whose table
+    // leaves out masking) gives back up to 1.4 % too much below 20° of grazing.
+    for roughness in [0.2f32, 0.6, 1.0] {
+        let metal = principled(Rgb::ONE, 1.0, roughness, 1.5, 1.0, Rgb::ONE);
+        for cos_o in [1.0f32, 0.7, 0.3, 0.05] {
+            let (mean, se) = albedo(&metal, wo_at(cos_o));
+            assert!(
+                mean > 0.99 - 4.0 * se && mean <= 1.0 + 4.0 * se + 1e-3,
+                "r {roughness} cos {cos_o}: {mean} ± {se}"
+            );
+        }
+    }
     let whites = [
-        MetalRough::new(Rgb::ONE, 1.0, 0.2, 1.0),
-        MetalRough::new(Rgb::ONE, 1.0, 1.0, 1.0),
-        MetalRough::new(Rgb::ONE, 0.0, 0.2, 1.0),
-        MetalRough::new(Rgb::ONE, 0.0, 1.0, 1.0),
+        principled(Rgb::ONE, 0.0, 0.2, 1.5, 1.0, Rgb::ONE),
+        principled(Rgb::ONE, 0.0, 1.0, 1.5, 1.0, Rgb::ONE),
+        principled(Rgb::ONE, 0.0, 0.5, 1.5, 1.0, Rgb::splat(2.0)),
+        principled(Rgb::ONE, 0.5, 0.5, 2.0, 1.0, Rgb::ONE),
     ];
     for b in whites {
-        for cos_o in [1.0f32, 0.7, 0.3, 0.05] {
-            let wo = wo_at(cos_o);
-            let n = 40_000;
-            let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-            for i in 0..n {
-                let (ul, u) = u2(i, 5);
-                let w = b.sample(wo, ul, u).map_or(0.0, |s| s.weight.max_element() as f64);
-                sum += w;
-                sum2 += w * w;
-            }
-            let mean = sum / n as f64;
-            let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
-            assert!(mean <= 1.0 + 4.0 * se + 1e-3, "{b:?} cos {cos_o}: albedo {mean} ± {se}");
+        for (cos_o, slack) in [(1.0f32, 0.0), (0.7, 0.0), (0.3, 0.0), (0.05, 0.02)] {
+            let (mean, se) = albedo(&b, wo_at(cos_o));
+            assert!(mean <= 1.0 + slack + 4.0 * se + 1e-3, "{b:?} cos {cos_o}: albedo {mean} ± {se}");
         }
     }
 }

@@ -34,8 +34,13 @@ use crate::math::{Mat4, Rgb, Vec2, Vec3A};
 use crate::scene::description::{CameraDesc, CameraPlacement, InstanceDesc, LightDesc, MeshDesc, SceneDescription};
 
 /// Extensions myriad reads. Others are listed in one warning.
-const SUPPORTED: [&str; 4] =
-    ["KHR_materials_emissive_strength", "KHR_materials_specular", "KHR_texture_transform", "KHR_lights_punctual"];
+const SUPPORTED: [&str; 5] = [
+    "KHR_materials_emissive_strength",
+    "KHR_materials_specular",
+    "KHR_materials_ior",
+    "KHR_texture_transform",
+    "KHR_lights_punctual",
+];
 
 /// Reads a glTF file.
 pub fn load(path: &Path, options: &LoadOptions) -> Result<SceneDescription> {
@@ -235,6 +240,8 @@ impl Loader<'_> {
                 metallic: pbr.metallic_factor(),
                 roughness: pbr.roughness_factor(),
                 specular: m.specular().map_or(1.0, |s| s.specular_factor()),
+                specular_color: m.specular().map_or(Rgb::ONE, |s| Rgb::from(s.specular_color_factor())),
+                ior: m.ior().unwrap_or(1.5),
                 emission: Rgb::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0),
                 double_sided: m.double_sided(),
                 base_color_texture: self.info(pbr.base_color_texture(), images),

@@ -58,6 +58,10 @@ fn validate_material(file: &str, m: &Material, images: usize) -> Result<()> {
     check_unit(file, &what, "metallic", m.metallic)?;
     check_unit(file, &what, "roughness", m.roughness)?;
     check_unit(file, &what, "specular", m.specular)?;
+    check_color(file, &what, "specular colour", m.specular_color, None)?;
+    if !(m.ior > 1.0 && m.ior.is_finite()) {
+        return Err(Error::scene(file, what, format!("IOR must be a finite number above 1, not {}", m.ior)));
+    }
     let textures =
         [&m.base_color_texture, &m.metallic_roughness_texture, &m.emission_texture, &m.normal_texture.map(|n| n.0)];
     if let Some(t) = textures.into_iter().flatten().find(|t| t.image as usize >= images) {

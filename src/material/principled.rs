@@ -1,0 +1,187 @@
+//! The Principled BSDF as Cycles (Blender 4.x/5.0) evaluates it for a glTF material, without
+//! transmission: a metal mixed by `metallic` with a dielectric specular layer over a
+//! Lambertian base.
+//!
+//! ```text
+//! f = m·F82(v·h)·GGX·c_metal + (1−m)·[ F_d(v·h)·GGX·c_spec + (1 − max_rgb A_spec(μo))·base/π ]
+//! GGX     = D(h)·G2/(4·μo·μi), α = roughness²
+//! F82     = Schlick from F0 = base with Cycles' 82° tint (specular colour, white by default)
+//! F_d     = mix(F0_d, 1, s(v·h)), s = (F_exact(v·h, η′) − F0(η′)) / (1 − F0(η′)),
+//!           F0_d = F0(η)·specularFactor·specularColor, η′ the IOR of F0(η)·specularFactor
+//! c       = (E + F_ms·(1 − E)) / E: multiple scattering, E = E(roughness, μo) from tables,
+//!           F_ms = F_avg·Ē / (1 − F_avg·(1 − Ē)) with F_avg the lobe's average Fresnel
+//! A_spec  = (E + F_ms·(1 − E)) · mix(F0_d, 1, s̄(roughness, μo, η′)): the layer's albedo
+//! ```
+//! The base is attenuated by the specular layer's albedo towards the viewer, one number for
+//! all channels, as Cycles' `closure_layering_weight` does; so the model is not reciprocal
+//! (nor is Cycles'). With `specularFactor` 0 (η′ = 1) there is no specular layer and the base
+//! is exactly Lambertian. Lobes are chosen in proportion to their albedo estimates.
+
+use super::BsdfSample;
+use super::fresnel::{self, F82Tint};
+use super::microfacet::Ggx;
+use super::tables;
+use crate::math::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
+use crate::math::{Rgb, Vec2, Vec3A};
+use std::f32::consts::FRAC_1_PI;
+
+/// The dielectric specular layer.
+#[derive(Clone, Copy, Debug)]
+struct Specular {
+    /// The IOR its Fresnel curve follows (η′).
+    eta: f32,
+    /// F0(η′).
+    f0_eta: f32,
+    /// Its normal-incidence colour, F0(η)·specularFactor·specularColor, clamped to [0, 1].
+    f0: Rgb,
+    /// F0(η′)^¼, the tables' third axis.
+    z: f32,
+    /// Its average Fresnel over the hemisphere.
+    average: Rgb,
+}
+
+impl Specular {
+    /// The layer of `ior`, `specular` (factor) and `color`; `None` when it reflects nothing.
+    fn new(ior: f32, specular: f32, color: Rgb) -> Option<Self> {
+        let f0 = fresnel::f0_from_ior(ior) * specular;
+        if !(f0 > 0.0) {
+            return None;
+        }
+        let eta = if specular == 1.0 { ior } else { fresnel::ior_from_f0(f0) };
+        let f0_eta = fresnel::f0_from_ior(eta);
+        let lobe_f0 = (color * f0).clamp(Rgb::ZERO, Rgb::ONE);
+        let s_avg = ((fresnel::dielectric_average(eta) - f0_eta) / (1.0 - f0_eta)).clamp(0.0, 1.0);
+        Some(Self { eta, f0_eta, f0: lobe_f0, z: f0_eta.powf(0.25), average: lobe_f0.lerp(Rgb::ONE, s_avg) })
+    }
+
+    /// Reflectance at microfacet cosine `mu`.
+    #[inline]
+    fn fresnel(&self, mu: f32) -> Rgb {
+        let s = ((fresnel::dielectric(mu, self.eta) - self.f0_eta) / (1.0 - self.f0_eta)).clamp(0.0, 1.0);
+        self.f0.lerp(Rgb::ONE, s)
+    }
+}
+
+/// The energy a GGX lobe of average Fresnel `average` gets back from multiple scattering:
+/// the factor (E + F_ms·(1 − E)) / E on its single-scattering value, and E + F_ms·(1 − E).
+#[inline]
+fn compensation(e: f32, e_avg: f32, average: Rgb) -> (Rgb, Rgb) {
+    let f_ms = average * e_avg / (Rgb::ONE - average * (1.0 - e_avg));
+    let kept = Rgb::splat(e) + f_ms * (1.0 - e);
+    (kept / e.max(1e-4), kept)
+}
+
+/// The model at one surface point.
+#[derive(Clone, Copy, Debug)]
+pub struct Principled {
+    base: Rgb,
+    metallic: f32,
+    roughness: f32,
+    ggx: Ggx,
+    metal: F82Tint,
+    specular: Option<Specular>,
+}
+
+/// What depends on the outgoing direction: the lobes' weights and the choice between them.
+struct View {
+    metal: Rgb,
+    specular: Rgb,
+    diffuse: Rgb,
+    /// Probability of sampling the GGX lobes (metal and specular share one distribution).
+    p_glossy: f32,
+}
+
+fn mean(c: Rgb) -> f32 {
+    (c.x + c.y + c.z) / 3.0
+}
+
+impl Principled {
+    /// The model for base colour, metallic and roughness (in [0, 1]), IOR (> 1), specular
+    /// factor (in [0, 1]) and specular colour (≥ 0).
+    pub fn new(base: Rgb, metallic: f32, roughness: f32, ior: f32, specular: f32, specular_color: Rgb) -> Self {
+        Self {
+            base,
+            metallic,
+            roughness,
+            ggx: Ggx::from_roughness(roughness),
+            metal: F82Tint::new(base.min(Rgb::ONE), specular_color.min(Rgb::ONE)),
+            specular: Specular::new(ior, specular, specular_color),
+        }
+    }
+
+    #[inline]
+    fn view(&self, mu: f32) -> View {
+        let (e, e_avg) = (tables::albedo(self.roughness, mu), tables::albedo_average(self.roughness));
+        let (metal_gain, _) = compensation(e, e_avg, self.metal.average());
+        let metal = metal_gain * self.metallic;
+        let dielectric = 1.0 - self.metallic;
+        let (specular, layer_albedo) = match &self.specular {
+            Some(s) => {
+                let (gain, kept) = compensation(e, e_avg, s.average);
+                let albedo = kept * s.f0.lerp(Rgb::ONE, tables::fresnel_weight(self.roughness, mu, s.z));
+                (gain * dielectric, albedo.max_element().clamp(0.0, 1.0))
+            }
+            None => (Rgb::ZERO, 0.0),
+        };
+        let diffuse = self.base * (dielectric * (1.0 - layer_albedo) * FRAC_1_PI);
+        let glossy = self.metallic * mean(self.metal.average()) + dielectric * layer_albedo;
+        let total = glossy + mean(diffuse) * std::f32::consts::PI;
+        View { metal, specular, diffuse, p_glossy: if total > 0.0 { glossy / total } else { 0.0 } }
+    }
+
+    #[inline]
+    fn eval_view(&self, v: &View, wo: Vec3A, wi: Vec3A) -> Rgb {
+        let h = (wo + wi).normalize();
+        let mu = wo.dot(h).max(0.0);
+        let ggx = self.ggx.d(h) * self.ggx.g2(wo, wi) / (4.0 * wo.z * wi.z);
+        let specular = self.specular.map_or(Rgb::ZERO, |s| s.fresnel(mu) * v.specular);
+        (self.metal.eval(mu) * v.metal + specular) * ggx + v.diffuse
+    }
+
+    #[inline]
+    fn pdf_view(&self, v: &View, wo: Vec3A, wi: Vec3A) -> f32 {
+        let h = (wo + wi).normalize();
+        v.p_glossy * self.ggx.reflection_pdf(wo, h) + (1.0 - v.p_glossy) * cosine_hemisphere_pdf(wi.z)
+    }
+
+    /// BSDF value (without the cosine).
+    #[inline]
+    pub fn eval(&self, wo: Vec3A, wi: Vec3A) -> Rgb {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return Rgb::ZERO;
+        }
+        self.eval_view(&self.view(wo.z), wo, wi)
+    }
+
+    /// Solid-angle density of [`Principled::sample`].
+    #[inline]
+    pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return 0.0;
+        }
+        self.pdf_view(&self.view(wo.z), wo, wi)
+    }
+
+    /// Picks the glossy or the diffuse lobe with `u_lobe`, then a direction with `u`.
+    #[inline]
+    pub fn sample(&self, wo: Vec3A, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let v = self.view(wo.z);
+        let wi = if u_lobe < v.p_glossy {
+            let h = self.ggx.sample_visible_normal(wo, u);
+            2.0 * wo.dot(h) * h - wo
+        } else {
+            square_to_cosine_hemisphere(u)
+        };
+        if wi.z <= 0.0 {
+            return None;
+        }
+        let pdf = self.pdf_view(&v, wo, wi);
+        if !(pdf > 0.0) {
+            return None;
+        }
+        Some(BsdfSample { wi, weight: self.eval_view(&v, wo, wi) * (wi.z / pdf), pdf })
+    }
+}
