@@ -95,9 +95,15 @@ fn transform(t: &TransformSpec) -> Mat4 {
 fn material(name: &str, spec: &MaterialSpec) -> Material {
     match *spec {
         MaterialSpec::Diffuse { albedo } => Material::diffuse(name, v3(albedo)),
-        MaterialSpec::MetalRough { base_color, metallic, roughness, specular, ior } => {
-            Material { metallic, roughness, specular, ior, ..Material::diffuse(name, v3(base_color)) }
-        }
+        MaterialSpec::MetalRough { base_color, metallic, roughness, specular, ior, coat, coat_roughness } => Material {
+            metallic,
+            roughness,
+            specular,
+            ior,
+            coat,
+            coat_roughness,
+            ..Material::diffuse(name, v3(base_color))
+        },
         MaterialSpec::Emissive { radiance, two_sided, albedo } => {
             Material { emission: v3(radiance), double_sided: two_sided, ..Material::diffuse(name, v3(albedo)) }
         }

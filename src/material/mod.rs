@@ -94,6 +94,10 @@ pub struct Material {
     pub specular_color: Rgb,
     /// Index of refraction of the dielectric (KHR_materials_ior, 1.5 by default), > 1.
     pub ior: f32,
+    /// Weight of a clear coat on top (KHR_materials_clearcoat; Blender's Coat), in [0, 1].
+    pub coat: f32,
+    /// Perceptual roughness of the coat, in [0, 1].
+    pub coat_roughness: f32,
     /// Emitted radiance (emissiveFactor × emissiveStrength), W/(m²·sr).
     pub emission: Rgb,
     /// Emits on both sides (glTF `doubleSided`); otherwise only on the counter-clockwise side.
@@ -122,6 +126,8 @@ impl Material {
             specular: 0.0,
             specular_color: Rgb::ONE,
             ior: 1.5,
+            coat: 0.0,
+            coat_roughness: 0.0,
             emission: Rgb::ZERO,
             double_sided: true,
             base_color_texture: None,
@@ -186,13 +192,14 @@ impl Material {
             roughness *= v.y;
             metallic *= v.z;
         }
-        if metallic == 0.0 && self.specular == 0.0 {
+        if metallic == 0.0 && self.specular == 0.0 && self.coat == 0.0 {
             if base.max_element() <= 0.0 {
                 return None;
             }
             return Some(Bsdf::Diffuse(Diffuse { albedo: base }));
         }
-        Some(Bsdf::Principled(Principled::new(base, metallic, roughness, self.ior, self.specular, self.specular_color)))
+        let p = Principled::new(base, metallic, roughness, self.ior, self.specular, self.specular_color);
+        Some(Bsdf::Principled(p.with_coat(self.coat, self.coat_roughness)))
     }
 }
 

@@ -1,9 +1,10 @@
 //! The Principled BSDF as Cycles (Blender 4.x/5.0) evaluates it for a glTF material, without
-//! transmission: a metal mixed by `metallic` with a dielectric specular layer over a
-//! Lambertian base.
+//! transmission: an optional coat over a metal mixed by `metallic` with a dielectric specular
+//! layer over a Lambertian base.
 //!
 //! ```text
-//! f = m·F82(v·h)·GGX·c_metal + (1−m)·[ F_d(v·h)·GGX·c_spec + (1 − max_rgb A_spec(μo))·base/π ]
+//! f = k·F_c(v·h)·GGX_c·c_coat + (1 − k·A_coat(μo))·f_below            (coat weight k, IOR 1.5)
+//! f_below = m·F82(v·h)·GGX·c_metal + (1−m)·[ F_d(v·h)·GGX·c_spec + (1 − max_rgb A_spec(μo))·base/π ]
 //! GGX     = D(h)·G2/(4·μo·μi), α = roughness²
 //! F82     = Schlick from F0 = base with Cycles' 82° tint (specular colour, white by default)
 //! F_d     = mix(F0_d, 1, s(v·h)), s = (F_exact(v·h, η′) − F0(η′)) / (1 − F0(η′)),
@@ -71,6 +72,19 @@ fn compensation(e: f32, e_avg: f32, average: Rgb) -> (Rgb, Rgb) {
     (kept / e.max(1e-4), kept)
 }
 
+/// Blender's Coat layer: a clear dielectric of IOR 1.5 over everything else.
+#[derive(Clone, Copy, Debug)]
+struct Coat {
+    weight: f32,
+    roughness: f32,
+    ggx: Ggx,
+    /// The coat's Fresnel layer (its average and table axis).
+    layer: Specular,
+}
+
+/// The coat's IOR (Blender's default; glTF's clearcoat has none of its own).
+const COAT_IOR: f32 = 1.5;
+
 /// The model at one surface point.
 #[derive(Clone, Copy, Debug)]
 pub struct Principled {
@@ -80,14 +94,18 @@ pub struct Principled {
     ggx: Ggx,
     metal: F82Tint,
     specular: Option<Specular>,
+    coat: Option<Coat>,
 }
 
 /// What depends on the outgoing direction: the lobes' weights and the choice between them.
 struct View {
+    coat: f32,
     metal: Rgb,
     specular: Rgb,
     diffuse: Rgb,
-    /// Probability of sampling the GGX lobes (metal and specular share one distribution).
+    /// Probabilities of sampling the coat's GGX lobe and the base's (metal and specular
+    /// share one distribution); the rest goes to the diffuse lobe.
+    p_coat: f32,
     p_glossy: f32,
 }
 
@@ -106,7 +124,15 @@ impl Principled {
             ggx: Ggx::from_roughness(roughness),
             metal: F82Tint::new(base.min(Rgb::ONE), specular_color.min(Rgb::ONE)),
             specular: Specular::new(ior, specular, specular_color),
+            coat: None,
         }
+    }
+
+    /// The same with a coat of `weight` and `roughness` (both in [0, 1]) on top.
+    pub fn with_coat(self, weight: f32, roughness: f32) -> Self {
+        let layer = Specular::new(COAT_IOR, 1.0, Rgb::ONE).expect("IOR 1.5 reflects");
+        let coat = (weight > 0.0).then(|| Coat { weight, roughness, ggx: Ggx::from_roughness(roughness), layer });
+        Self { coat, ..self }
     }
 
     #[inline]
@@ -125,23 +151,46 @@ impl Principled {
         };
         let diffuse = self.base * (dielectric * (1.0 - layer_albedo) * FRAC_1_PI);
         let glossy = self.metallic * mean(self.metal.average()) + dielectric * layer_albedo;
-        let total = glossy + mean(diffuse) * std::f32::consts::PI;
-        View { metal, specular, diffuse, p_glossy: if total > 0.0 { glossy / total } else { 0.0 } }
+        // The coat takes its albedo from everything under it (one number, as Cycles does).
+        let (coat, coat_albedo, below) = match &self.coat {
+            Some(c) => {
+                let e = tables::albedo(c.roughness, mu);
+                let (gain, kept) = compensation(e, tables::albedo_average(c.roughness), c.layer.average);
+                let albedo =
+                    kept.x * (c.layer.f0.x + (1.0 - c.layer.f0.x) * tables::fresnel_weight(c.roughness, mu, c.layer.z));
+                (c.weight * gain.x, c.weight * albedo, (1.0 - c.weight * albedo).clamp(0.0, 1.0))
+            }
+            None => (0.0, 0.0, 1.0),
+        };
+        let (glossy, diffuse_albedo) = (below * glossy, below * mean(diffuse) * std::f32::consts::PI);
+        let total = coat_albedo + glossy + diffuse_albedo;
+        let p = |x: f32| if total > 0.0 { x / total } else { 0.0 };
+        View {
+            coat,
+            metal: metal * below,
+            specular: specular * below,
+            diffuse: diffuse * below,
+            p_coat: p(coat_albedo),
+            p_glossy: p(glossy),
+        }
     }
 
     #[inline]
     fn eval_view(&self, v: &View, wo: Vec3A, wi: Vec3A) -> Rgb {
         let h = (wo + wi).normalize();
         let mu = wo.dot(h).max(0.0);
-        let ggx = self.ggx.d(h) * self.ggx.g2(wo, wi) / (4.0 * wo.z * wi.z);
+        let lobe = |g: &Ggx| g.d(h) * g.g2(wo, wi) / (4.0 * wo.z * wi.z);
         let specular = self.specular.map_or(Rgb::ZERO, |s| s.fresnel(mu) * v.specular);
-        (self.metal.eval(mu) * v.metal + specular) * ggx + v.diffuse
+        let coat = self.coat.map_or(Rgb::ZERO, |c| c.layer.fresnel(mu) * (v.coat * lobe(&c.ggx)));
+        coat + (self.metal.eval(mu) * v.metal + specular) * lobe(&self.ggx) + v.diffuse
     }
 
     #[inline]
     fn pdf_view(&self, v: &View, wo: Vec3A, wi: Vec3A) -> f32 {
         let h = (wo + wi).normalize();
-        v.p_glossy * self.ggx.reflection_pdf(wo, h) + (1.0 - v.p_glossy) * cosine_hemisphere_pdf(wi.z)
+        let coat = self.coat.map_or(0.0, |c| v.p_coat * c.ggx.reflection_pdf(wo, h));
+        let diffuse = (1.0 - v.p_coat - v.p_glossy).max(0.0);
+        coat + v.p_glossy * self.ggx.reflection_pdf(wo, h) + diffuse * cosine_hemisphere_pdf(wi.z)
     }
 
     /// BSDF value (without the cosine).
@@ -169,11 +218,14 @@ impl Principled {
             return None;
         }
         let v = self.view(wo.z);
-        let wi = if u_lobe < v.p_glossy {
-            let h = self.ggx.sample_visible_normal(wo, u);
+        let reflect = |g: &Ggx| {
+            let h = g.sample_visible_normal(wo, u);
             2.0 * wo.dot(h) * h - wo
-        } else {
-            square_to_cosine_hemisphere(u)
+        };
+        let wi = match (u_lobe < v.p_coat, u_lobe < v.p_coat + v.p_glossy, &self.coat) {
+            (true, _, Some(c)) => reflect(&c.ggx),
+            (_, true, _) => reflect(&self.ggx),
+            _ => square_to_cosine_hemisphere(u),
         };
         if wi.z <= 0.0 {
             return None;

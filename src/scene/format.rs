@@ -148,6 +148,12 @@ pub enum MaterialSpec {
         /// Index of refraction of the dielectric (default 1.5).
         #[serde(default = "default_ior")]
         ior: f32,
+        /// Weight of a clear coat (IOR 1.5) on top, in [0,1] (default 0).
+        #[serde(default)]
+        coat: f32,
+        /// Perceptual roughness of the coat (default 0).
+        #[serde(default)]
+        coat_roughness: f32,
     },
     /// A light-emitting surface (diffuse emission).
     Emissive {

@@ -306,27 +306,54 @@ fn cycles_downsampled(name: &str, k: u32) -> (UVec2, Vec<(Rgb, Rgb)>) {
     (size, blocks)
 }
 
+/// Renders Blender export `name` at a quarter of its Cycles reference's resolution with `spp`
+/// and checks them pixel by pixel and over 4 × 4-pixel regions: z = (ours − Cycles) over the
+/// two standard errors combined, per channel. Stratified samples converge faster than the
+/// i.i.d. error the film's variance estimates, and the reference's is overstated where the
+/// picture varies, so without bias the mean z² is at most about 1; bias adds to it, the more
+/// over a region, where it accumulates while the noise averages out (fireflies, which make
+/// single pixels stray, average out too).
+fn agrees_with_cycles_pixel_by_pixel(name: &str, spp: u32) {
+    let (size, cycles) = cycles_downsampled(name, 4);
+    let scene = load(&blender(&format!("{name}.glb")), Some(size), None).unwrap();
+    let film = render_with(&scene, LightSamplerKind::Tree, spp, 9, 5);
+    let z = |pixels: &[usize], c: usize| {
+        let (d, v) = pixels.iter().fold((0.0f64, 0.0f64), |(d, v), &i| {
+            let dv = (film.variance_of_mean(i)[c] + cycles[i].1[c]) as f64;
+            (d + (film.mean(i)[c] - cycles[i].0[c]) as f64, v + dv)
+        });
+        d / v.max(1e-12).sqrt()
+    };
+    let mean_z2 = |groups: &[Vec<usize>]| {
+        let zs: Vec<f64> = groups.iter().flat_map(|g| (0..3).map(|c| z(g, c))).collect();
+        let worst = zs.iter().fold(0.0f64, |w, z| w.max(z.abs()));
+        (zs.iter().map(|z| z * z).sum::<f64>() / zs.len() as f64, worst, zs.len())
+    };
+    let pixels: Vec<Vec<usize>> = (0..cycles.len()).map(|i| vec![i]).collect();
+    let (rw, rh) = (size.x / 4, size.y / 4);
+    let regions: Vec<Vec<usize>> = (0..rw * rh)
+        .map(|r| {
+            let (rx, ry) = (r % rw, r / rw);
+            (0..16).map(|k| ((ry * 4 + k / 4) * size.x + rx * 4 + k % 4) as usize).collect()
+        })
+        .collect();
+    // z² has variance ≈ 2 for Gaussian noise; five standard errors of the mean, and a little.
+    let bound = |n: usize| 1.0 + 5.0 * (2.0 / n as f64).sqrt() + 0.05;
+    let (pixel_z2, _, n) = mean_z2(&pixels);
+    assert!(pixel_z2 < bound(n), "{name}: mean z² = {pixel_z2} over {n} pixel channels");
+    let (region_z2, worst, n) = mean_z2(&regions);
+    assert!(region_z2 < bound(n), "{name}: mean z² = {region_z2} over {n} region channels");
+    assert!(worst < 6.0, "{name}: a region is {worst} standard errors from Cycles");
+}
+
 #[test]
 fn punctual_lights_agree_with_cycles_pixel_by_pixel() {
-    // A point, a spot with Blender's blend and a sun. Per pixel and channel, z = (ours −
-    // Cycles) over the two standard errors combined. Stratified samples converge faster than
-    // the i.i.d. error the film's variance estimates, and the reference's is overstated
-    // where the picture varies, so without bias the mean z² is at most about 1; bias adds.
-    let (size, cycles) = cycles_downsampled("punctual", 4);
-    let scene = load(&blender("punctual.glb"), Some(size), None).unwrap();
-    let film = render_with(&scene, LightSamplerKind::Tree, 256, 9, 5);
-    let (mut sum, mut n, mut worst) = (0.0f64, 0usize, 0.0f64);
-    for (i, (reference, ref_var)) in cycles.iter().enumerate() {
-        let (m, v) = (film.mean(i), film.variance_of_mean(i));
-        for c in 0..3 {
-            let z = (m[c] - reference[c]) as f64 / ((v[c] + ref_var[c]) as f64).max(1e-12).sqrt();
-            sum += z * z;
-            n += 1;
-            worst = worst.max(z.abs());
-        }
-    }
-    let mean_z2 = sum / n as f64;
-    // z² has variance ≈ 2 for Gaussian noise; allow five standard errors (heavier tails too).
-    assert!(mean_z2 < 1.0 + 5.0 * (2.0 / n as f64).sqrt() + 0.05, "mean z² = {mean_z2} over {n}");
-    assert!(worst < 6.0, "a pixel is {worst} standard errors from Cycles");
+    // A point, a spot with Blender's blend and a sun.
+    agrees_with_cycles_pixel_by_pixel("punctual", 256);
+}
+
+#[test]
+fn principled_materials_agree_with_cycles_pixel_by_pixel() {
+    // Metals, plastics, a glossy floor and a coated paint under a point, a spot and a panel.
+    agrees_with_cycles_pixel_by_pixel("materials", 512);
 }

@@ -34,7 +34,8 @@ use crate::math::{Mat4, Rgb, Vec2, Vec3A};
 use crate::scene::description::{CameraDesc, CameraPlacement, InstanceDesc, LightDesc, MeshDesc, SceneDescription};
 
 /// Extensions myriad reads. Others are listed in one warning.
-const SUPPORTED: [&str; 5] = [
+const SUPPORTED: [&str; 6] = [
+    "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_materials_specular",
     "KHR_materials_ior",
@@ -227,6 +228,15 @@ impl Loader<'_> {
                 let scale = n.scale();
                 self.texture(n.texture(), n.tex_coord(), transform, images).map(|t| (t, scale))
             });
+            let clearcoat = m.extension_value("KHR_materials_clearcoat").map_or((0.0, 0.0), |c| {
+                let factor = |k: &str| c.get(k).and_then(|v| v.as_f64()).map(|v| v as f32);
+                // Blender's importer gives a coat without a roughness 0.03, not glTF's 0.
+                let default_roughness = if self.blender { 0.03 } else { 0.0 };
+                let textured = c.get("clearcoatRoughnessTexture").is_some();
+                let roughness =
+                    factor("clearcoatRoughnessFactor").unwrap_or(if textured { 0.0 } else { default_roughness });
+                (factor("clearcoatFactor").unwrap_or(0.0), roughness)
+            });
             let alpha_cutoff = match m.alpha_mode() {
                 gltf::material::AlphaMode::Mask => Some(m.alpha_cutoff().unwrap_or(0.5)),
                 gltf::material::AlphaMode::Blend => {
@@ -242,6 +252,8 @@ impl Loader<'_> {
                 specular: m.specular().map_or(1.0, |s| s.specular_factor()),
                 specular_color: m.specular().map_or(Rgb::ONE, |s| Rgb::from(s.specular_color_factor())),
                 ior: m.ior().unwrap_or(1.5),
+                coat: clearcoat.0,
+                coat_roughness: clearcoat.1,
                 emission: Rgb::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0),
                 double_sided: m.double_sided(),
                 base_color_texture: self.info(pbr.base_color_texture(), images),
