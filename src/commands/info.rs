@@ -8,6 +8,7 @@ use super::{LoadedScene, SceneOptions, human_duration, load_scene};
 use crate::error::Result;
 use crate::light_sampler::{LightTree, TreeStats};
 use crate::limits::human_bytes;
+use crate::material::AlphaMode;
 
 /// Everything `info` reports.
 pub struct InfoReport {
@@ -44,6 +45,16 @@ impl fmt::Display for InfoReport {
             st.triangles, st.emissive_triangles, st.stored_triangles, st.instances, st.meshes
         )?;
         writeln!(f, "materials    {}", s.materials.len())?;
+        for m in &s.materials {
+            let alpha = match m.alpha {
+                AlphaMode::Opaque => String::new(),
+                AlphaMode::Mask(c) => format!(", alpha mask at {c}"),
+                AlphaMode::Blend => ", alpha blend (stochastic)".into(),
+            };
+            let ignored =
+                if m.ignored.is_empty() { String::new() } else { format!("; not rendered: {}", m.ignored.join(", ")) };
+            writeln!(f, "  {:<24} {}{alpha}{ignored}", format!("'{}'", m.name), m.model_name())?;
+        }
         let mut kinds: BTreeMap<&str, usize> = BTreeMap::new();
         for l in &s.lights {
             *kinds.entry(l.kind_name()).or_default() += 1;

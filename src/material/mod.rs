@@ -110,8 +110,23 @@ pub struct Material {
     pub emission_texture: Option<TextureRef>,
     /// Tangent-space normal map, with its `scale`.
     pub normal_texture: Option<(TextureRef, f32)>,
-    /// Alpha mode MASK: surfaces with alpha below this are cut out.
-    pub alpha_cutoff: Option<f32>,
+    /// How alpha makes the surface see-through.
+    pub alpha: AlphaMode,
+    /// What the loader read but myriad does not render (properties, extensions), for `info`.
+    pub ignored: Vec<String>,
+}
+
+/// How a material's alpha (base alpha × the base-colour texture's) lets rays through.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub enum AlphaMode {
+    /// Alpha is ignored.
+    #[default]
+    Opaque,
+    /// glTF MASK: cut out where alpha is below the cutoff.
+    Mask(f32),
+    /// glTF BLEND, as stochastic transparency: a ray passes with probability 1 − alpha (a
+    /// hash of the ray and the hit decides, so every ray and surface draws its own number).
+    Blend,
 }
 
 impl Material {
@@ -134,7 +149,24 @@ impl Material {
             metallic_roughness_texture: None,
             emission_texture: None,
             normal_texture: None,
-            alpha_cutoff: None,
+            alpha: AlphaMode::Opaque,
+            ignored: Vec::new(),
+        }
+    }
+
+    /// True when rays may pass through parts of the surface (the BVH then asks
+    /// [`Material::is_cut_out`] at each hit).
+    pub fn has_alpha(&self) -> bool {
+        self.alpha != AlphaMode::Opaque
+    }
+
+    /// The name of the model it renders with, for `info`.
+    pub fn model_name(&self) -> &'static str {
+        match () {
+            _ if self.base_color == Rgb::ZERO && self.is_emissive() && self.metallic == 0.0 => "emitter",
+            _ if self.metallic == 0.0 && self.specular == 0.0 && self.coat == 0.0 => "lambert",
+            _ if self.coat > 0.0 => "principled + coat",
+            _ => "principled",
         }
     }
 
@@ -152,12 +184,16 @@ impl Material {
         }
     }
 
-    /// True where an alpha-masked surface is cut out.
+    /// True where the surface lets the ray through at `uv`; `u ∈ [0,1)` is the ray's own
+    /// number for this hit (alpha BLEND passes the ray when alpha ≤ u).
     #[inline]
-    pub fn is_cut_out(&self, uv: Vec2, images: &[Image]) -> bool {
-        let Some(cutoff) = self.alpha_cutoff else { return false };
-        let alpha = self.base_alpha * self.base_color_texture.as_ref().map_or(1.0, |t| t.sample(images, uv).w);
-        alpha < cutoff
+    pub fn is_cut_out(&self, uv: Vec2, images: &[Image], u: f32) -> bool {
+        let alpha = || self.base_alpha * self.base_color_texture.as_ref().map_or(1.0, |t| t.sample(images, uv).w);
+        match self.alpha {
+            AlphaMode::Opaque => false,
+            AlphaMode::Mask(cutoff) => alpha() < cutoff,
+            AlphaMode::Blend => alpha() <= u,
+        }
     }
 
     /// Emitted radiance at `uv`.

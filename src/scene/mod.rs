@@ -22,6 +22,7 @@ use crate::geometry::{Geometry, Ray, SurfaceHit};
 use crate::light::Light;
 use crate::material::{Image, Material};
 use crate::math::Vec3A;
+use crate::sampling::fmix64;
 
 /// Counts, sizes and timings of a built scene.
 #[derive(Clone, Debug, Default)]
@@ -81,17 +82,39 @@ pub struct Scene {
     pub inputs: Vec<std::path::PathBuf>,
 }
 
+/// A hash of a ray (its origin and direction bits): rays of different samples, bounces and
+/// pixels differ, so it stands in for a random number where traversal has no sample stream.
+#[inline]
+fn ray_key(ray: &Ray) -> u64 {
+    let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
+    let bits =
+        |a: [f32; 3]| (a[0].to_bits() as u64) ^ ((a[1].to_bits() as u64) << 21) ^ ((a[2].to_bits() as u64) << 42);
+    fmix64(bits(o) ^ fmix64(bits(d)))
+}
+
+/// The number in `[0,1)` a ray (by its key) draws at the surface point `uv`: different for
+/// every surface it meets, so that stacked transparent layers are independent.
+#[inline]
+fn hit_number(key: u64, uv: crate::math::Vec2) -> f32 {
+    let h = fmix64(key ^ ((uv.x.to_bits() as u64) << 32 | uv.y.to_bits() as u64));
+    (h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+}
+
 impl Scene {
     /// Closest surface along `ray` within `t_max` (alpha cut-outs let rays through).
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
-        self.geometry.intersect(ray, t_max, |m, uv| self.materials[m as usize].is_cut_out(uv, &self.images))
+        let key = ray_key(ray);
+        self.geometry
+            .intersect(ray, t_max, |m, uv| self.materials[m as usize].is_cut_out(uv, &self.images, hit_number(key, uv)))
     }
 
     /// True when something blocks `ray` before `t_max`.
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        self.geometry.occluded(ray, t_max, |m, uv| self.materials[m as usize].is_cut_out(uv, &self.images))
+        let key = ray_key(ray);
+        self.geometry
+            .occluded(ray, t_max, |m, uv| self.materials[m as usize].is_cut_out(uv, &self.images, hit_number(key, uv)))
     }
 
     /// Total emitted power (luminance watts) of every light.

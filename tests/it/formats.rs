@@ -284,6 +284,36 @@ fn an_alpha_mask_cuts_the_surface_out() {
     assert!(!cut.occluded(&ray, 10.0));
 }
 
+#[test]
+fn alpha_blend_lets_rays_through_as_often_as_it_is_transparent() {
+    // The cut-out wall again, in BLEND mode at alpha 0.25 without its texture: three rays in
+    // four pass, for intersection and shadow rays alike, each ray drawing its own number.
+    let dir = tempfile::tempdir().unwrap();
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(cornell("gltf").with_file_name("cornell-cutout.gltf")).unwrap())
+            .unwrap();
+    let wall = &mut doc["materials"][4];
+    wall["alphaMode"] = json!("BLEND");
+    wall["pbrMetallicRoughness"] = json!({"baseColorFactor": [0.8, 0.8, 0.8, 0.25]});
+    let path = dir.path().join("blend.gltf");
+    std::fs::write(&path, doc.to_string()).unwrap();
+    let scene = load(&path, Some(UVec2::new(8, 6)), None).unwrap();
+    let n = 20_000;
+    let (mut passed, mut unshadowed) = (0, 0);
+    for k in 0..n {
+        // Above the boxes, so that only the wall is in the way.
+        let origin = myriad::math::Vec3A::new(-0.8 + (k % 100) as f32 * 0.016, 1.45 + (k / 100) as f32 * 0.002, 0.0);
+        let ray = myriad::geometry::Ray::new(origin, -myriad::math::Vec3A::Z);
+        passed += scene.intersect(&ray, f32::INFINITY).is_none() as usize;
+        unshadowed += !scene.occluded(&ray, 10.0) as usize;
+    }
+    for (what, count) in [("intersection", passed), ("shadow", unshadowed)] {
+        let rate = count as f64 / n as f64;
+        let se = (0.75 * 0.25 / n as f64).sqrt();
+        assert!((rate - 0.75).abs() < 5.0 * se, "{what} rays pass {rate}, expected 0.75");
+    }
+}
+
 /// The Cycles reference of `name` averaged over `k × k` blocks (exactly what a box-filtered
 /// render at 1/k of its resolution sees), with the variance of each block's mean estimated
 /// from the spread of its pixels (which overstates it where the picture itself varies).

@@ -29,7 +29,7 @@ use super::image_file::from_rgba8;
 use crate::error::{Error, Result};
 use crate::light::SpotCurve;
 use crate::material::texture::{UvTransform, Wrap};
-use crate::material::{Image, Material, TextureRef};
+use crate::material::{AlphaMode, Image, Material, TextureRef};
 use crate::math::{Mat4, Rgb, Vec2, Vec3A};
 use crate::scene::description::{CameraDesc, CameraPlacement, InstanceDesc, LightDesc, MeshDesc, SceneDescription};
 
@@ -217,7 +217,6 @@ impl Loader<'_> {
     }
 
     fn materials(&mut self, doc: &gltf::Document, images: &ImageMap) {
-        let mut blend = Vec::new();
         for m in doc.materials() {
             let name = m.name().map_or_else(|| format!("material {}", m.index().unwrap_or(0)), str::to_string);
             let pbr = m.pbr_metallic_roughness();
@@ -237,13 +236,10 @@ impl Loader<'_> {
                     factor("clearcoatRoughnessFactor").unwrap_or(if textured { 0.0 } else { default_roughness });
                 (factor("clearcoatFactor").unwrap_or(0.0), roughness)
             });
-            let alpha_cutoff = match m.alpha_mode() {
-                gltf::material::AlphaMode::Mask => Some(m.alpha_cutoff().unwrap_or(0.5)),
-                gltf::material::AlphaMode::Blend => {
-                    blend.push(name.clone());
-                    None
-                }
-                gltf::material::AlphaMode::Opaque => None,
+            let alpha = match m.alpha_mode() {
+                gltf::material::AlphaMode::Mask => AlphaMode::Mask(m.alpha_cutoff().unwrap_or(0.5)),
+                gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+                gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
             };
             let material = Material {
                 base_alpha: bc[3],
@@ -260,15 +256,11 @@ impl Loader<'_> {
                 metallic_roughness_texture: self.info(pbr.metallic_roughness_texture(), images),
                 emission_texture: self.info(m.emissive_texture(), images),
                 normal_texture,
-                alpha_cutoff,
+                alpha,
+                ignored: ignored_properties(&m),
                 ..Material::diffuse(&name, Rgb::new(bc[0], bc[1], bc[2]))
             };
             self.desc.materials.push(material);
-        }
-        if !blend.is_empty() {
-            self.warn(format!(
-                "materials {blend:?} use alpha mode BLEND, rendered opaque (MASK cut-outs are supported)"
-            ));
         }
         // glTF's default material, for primitives without one: white, metallic 1, roughness 1.
         self.desc.materials.push(Material {
@@ -472,6 +464,52 @@ impl Loader<'_> {
         }
         Ok(())
     }
+}
+
+/// Material extensions myriad does not render (when a material has them, `info` lists them).
+const UNRENDERED_EXTENSIONS: [&str; 8] = [
+    "KHR_materials_sheen",
+    "KHR_materials_iridescence",
+    "KHR_materials_anisotropy",
+    "KHR_materials_dispersion",
+    "KHR_materials_diffuse_transmission",
+    "KHR_materials_pbrSpecularGlossiness",
+    "KHR_materials_unlit",
+    "KHR_materials_variants",
+];
+
+/// What a material has that myriad reads past: extensions it does not render and textures of
+/// the extensions it does (their factors are used).
+fn ignored_properties(m: &gltf::Material) -> Vec<String> {
+    let mut ignored: Vec<String> =
+        UNRENDERED_EXTENSIONS.iter().filter(|e| m.extension_value(e).is_some()).map(|e| e.to_string()).collect();
+    if m.transmission().is_some() {
+        ignored.push("KHR_materials_transmission".into());
+    }
+    if m.volume().is_some() {
+        ignored.push("KHR_materials_volume".into());
+    }
+    if let Some(s) = m.specular() {
+        for (present, name) in [
+            (s.specular_texture().is_some(), "specularTexture"),
+            (s.specular_color_texture().is_some(), "specularColorTexture"),
+        ] {
+            if present {
+                ignored.push(format!("KHR_materials_specular.{name}"));
+            }
+        }
+    }
+    if let Some(c) = m.extension_value("KHR_materials_clearcoat") {
+        for name in ["clearcoatTexture", "clearcoatRoughnessTexture", "clearcoatNormalTexture"] {
+            if c.get(name).is_some() {
+                ignored.push(format!("KHR_materials_clearcoat.{name}"));
+            }
+        }
+    }
+    if m.occlusion_texture().is_some() {
+        ignored.push("occlusionTexture (no effect in a path tracer)".into());
+    }
+    ignored
 }
 
 /// KHR_texture_transform from raw extension JSON (for normal textures).

@@ -74,7 +74,7 @@ impl Placer<'_> {
                 self.check_placed(mesh, name, m.transform_point3a(corner))?;
             }
         }
-        let masked = self.desc.materials[mesh.material as usize].alpha_cutoff.is_some();
+        let masked = self.desc.materials[mesh.material as usize].has_alpha();
         let attr = self.attributes(mesh, None);
         let block = self.geo.add_shared_mesh(&mesh.positions, &mesh.triangles, attr, mesh.material, masked);
         for &(m, _) in placements {
@@ -97,7 +97,7 @@ impl Placer<'_> {
         }
         let attr = self.attributes(mesh, Some(m));
         let emission = AreaEmission { radiance: material.emission, two_sided: material.double_sided };
-        let (emissive, masked) = (material.is_emissive(), material.alpha_cutoff.is_some());
+        let (emissive, masked) = (material.is_emissive(), material.has_alpha());
         let corners = |t: [u32; 3]| if flip { [t[0], t[2], t[1]] } else { t };
         self.stats.instances += 1;
         if emissive && mesh.quads {
