@@ -86,6 +86,19 @@ impl Ggx {
     }
 }
 
+/// The direction `wo` refracts into through a facet of normal `h` (on `wo`'s side), relative
+/// IOR `eta` (the far side over `wo`'s side); `None` past total internal reflection.
+#[inline]
+pub fn refract(wo: Vec3A, h: Vec3A, eta: f32) -> Option<Vec3A> {
+    let cos_i = wo.dot(h);
+    let sin2_t = (1.0 - cos_i * cos_i).max(0.0) / (eta * eta);
+    if sin2_t >= 1.0 {
+        return None;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    Some(-wo / eta + h * (cos_i / eta - cos_t))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,8 +1,9 @@
 //! Tables of GGX integrals that Cycles' Principled BSDF relies on, as myriad computes them:
 //! the directional albedo E(r, μ) of a white GGX lobe and its cosine-weighted average Ē(r),
-//! for multiple-scattering energy compensation (Kulla & Conty 2017), and the average Fresnel
-//! weight s(r, μ, z) of a dielectric, for the albedo a specular layer takes from what lies
-//! under it.
+//! for multiple-scattering energy compensation (Kulla & Conty 2017); the same for a rough
+//! glass interface (reflection and refraction together, from outside, η > 1, and from inside,
+//! 1/η) over r, μ and z; and the average Fresnel weight s(r, μ, z) of a dielectric, for the
+//! albedo a specular layer takes from what lies under it.
 //!
 //! Owns: the integrands ([`ggx_albedo`], [`ggx_albedo_average`], [`fresnel_weight_average`]),
 //! the grids (Cycles' layout: node i of n at i/(n−1), roughness fastest, the lowest node moved
@@ -68,6 +69,44 @@ pub fn ggx_albedo_average(rough: f32, steps: usize, n: usize) -> f64 {
         .sum()
 }
 
+/// Albedo of a white rough glass interface seen from `wo` at cos θo = `mu`, relative IOR
+/// `eta` (the far side over `wo`'s side): each visible normal reflects with the exact Fresnel
+/// F and refracts with 1 − F (total internal reflection reflects all), and each direction
+/// that stays on its side counts G2/G1, without the η² of radiance compression (Cycles').
+pub fn ggx_glass_albedo(rough: f32, mu: f32, eta: f32, n: usize) -> f64 {
+    let ggx = Ggx::from_roughness(rough);
+    let wo = outgoing(mu);
+    let mut sum = 0.0;
+    for a in 0..n {
+        for b in 0..n {
+            let u = Vec2::new((a as f32 + 0.5) / n as f32, (b as f32 + 0.5) / n as f32);
+            let h = ggx.sample_visible_normal(wo, u);
+            let cos = wo.dot(h);
+            let f = fresnel::dielectric(cos, eta);
+            let reflected = 2.0 * cos * h - wo;
+            if reflected.z > 0.0 {
+                sum += f as f64 * (ggx.g2(wo, reflected) / ggx.g1(wo)) as f64;
+            }
+            if let Some(refracted) = super::microfacet::refract(wo, h, eta)
+                && refracted.z < 0.0
+            {
+                sum += (1.0 - f) as f64 * (ggx.g2(wo, -refracted) / ggx.g1(wo)) as f64;
+            }
+        }
+    }
+    sum / (n * n) as f64
+}
+
+/// ∫₀¹ 2μ·E_glass(r, μ, η) dμ by the midpoint rule over `steps` cosines.
+pub fn ggx_glass_albedo_average(rough: f32, eta: f32, steps: usize, n: usize) -> f64 {
+    (0..steps)
+        .map(|k| {
+            let mu = (k as f32 + 0.5) / steps as f32;
+            2.0 * mu as f64 * ggx_glass_albedo(rough, mu, eta, n) / steps as f64
+        })
+        .sum()
+}
+
 /// The IOR at z = F0(η)^¼, the s table's third axis.
 pub fn ior_of_z(z: f32) -> f32 {
     fresnel::ior_from_f0(z.powi(4))
@@ -81,6 +120,32 @@ pub fn fresnel_weight_average(rough: f32, mu: f32, z: f32, n: usize) -> f64 {
     visible_normal_mean(rough, mu, n, |_, wo, h, _| {
         ((fresnel::dielectric(wo.dot(h), eta) - f0) / (1.0 - f0)).clamp(0.0, 1.0) as f64
     })
+}
+
+/// The glass tables, computed: E and Ē from outside (η = [`ior_of_z`]) and from inside (1/η).
+pub fn compute_glass(n: usize) -> [Vec<f32>; 4] {
+    let cells = |inside: bool| -> Vec<f32> {
+        (0..S_NODES * S_NODES * S_NODES)
+            .into_par_iter()
+            .map(|k| {
+                let r = node(k % S_NODES, S_NODES, 1e-4, 1.0);
+                let m = node(k / S_NODES % S_NODES, S_NODES, 1e-4, 1.0);
+                let eta = ior_of_z(node(k / (S_NODES * S_NODES), S_NODES, 1e-4, 0.99));
+                ggx_glass_albedo(r, m, if inside { 1.0 / eta } else { eta }, n) as f32
+            })
+            .collect()
+    };
+    let averages = |inside: bool| -> Vec<f32> {
+        (0..S_NODES * S_NODES)
+            .into_par_iter()
+            .map(|k| {
+                let r = node(k % S_NODES, S_NODES, 1e-4, 1.0);
+                let eta = ior_of_z(node(k / S_NODES, S_NODES, 1e-4, 0.99));
+                ggx_glass_albedo_average(r, if inside { 1.0 / eta } else { eta }, 32, n / 2) as f32
+            })
+            .collect()
+    };
+    [cells(false), averages(false), cells(true), averages(true)]
 }
 
 /// The tables, computed (what the generator writes): E, Ē and s.
@@ -137,13 +202,41 @@ pub fn albedo_average(rough: f32) -> f32 {
     data::GGX_E_AVG[i] + (data::GGX_E_AVG[i + 1] - data::GGX_E_AVG[i]) * f
 }
 
+/// Trilinear lookup in a table of `n³` (x fastest).
+#[inline]
+fn lookup3(table: &[f32], n: usize, x: f32, y: f32, z: f32) -> f32 {
+    let (k, fz) = position(z, n);
+    let plane = |k: usize| lookup2(&table[k * n * n..], n, x, y);
+    let (a, b) = (plane(k), plane(k + 1));
+    a + (b - a) * fz
+}
+
 /// s(r, μ, z): the average Fresnel weight of a dielectric lobe (z = F0(η)^¼).
 #[inline]
 pub fn fresnel_weight(rough: f32, mu: f32, z: f32) -> f32 {
-    let (k, fz) = position(z, S_NODES);
-    let plane = |k: usize| lookup2(&data::GGX_GEN_SCHLICK_IOR_S[k * S_NODES * S_NODES..], S_NODES, rough, mu);
-    let (a, b) = (plane(k), plane(k + 1));
-    a + (b - a) * fz
+    lookup3(&data::GGX_GEN_SCHLICK_IOR_S, S_NODES, rough, mu, z)
+}
+
+/// The glass tables' z axis for relative IOR `eta` (on either side), and whether it is the
+/// inside table.
+#[inline]
+fn glass_axis(eta: f32) -> (f32, bool) {
+    let outside = eta >= 1.0;
+    (fresnel::f0_from_ior(if outside { eta } else { 1.0 / eta }).powf(0.25), !outside)
+}
+
+/// Albedo of a white rough glass interface of relative IOR `eta` at cos θo = `mu`.
+#[inline]
+pub fn glass_albedo(rough: f32, mu: f32, eta: f32) -> f32 {
+    let (z, inside) = glass_axis(eta);
+    lookup3(if inside { &data::GGX_GLASS_INV_E } else { &data::GGX_GLASS_E }, S_NODES, rough, mu, z)
+}
+
+/// Its cosine-weighted average over the hemisphere.
+#[inline]
+pub fn glass_albedo_average(rough: f32, eta: f32) -> f32 {
+    let (z, inside) = glass_axis(eta);
+    lookup2(if inside { &data::GGX_GLASS_INV_E_AVG } else { &data::GGX_GLASS_E_AVG }, S_NODES, rough, z)
 }
 
 #[cfg(test)]
@@ -173,6 +266,23 @@ mod tests {
             let stored = data::GGX_GEN_SCHLICK_IOR_S[(zi * S_NODES + mi) * S_NODES + ri];
             assert!((fresnel_weight_average(r, m, z, 96) as f32 - stored).abs() < 3e-3, "s({r}, {m}, {z}) = {stored}");
         }
+    }
+
+    #[test]
+    fn the_glass_tables_hold_what_their_integrand_gives() {
+        for (ri, mi, zi) in [(0, 15, 3), (8, 4, 8), (15, 15, 15), (5, 1, 10)] {
+            let (r, m, z) = (node(ri, S_NODES, 1e-4, 1.0), node(mi, S_NODES, 1e-4, 1.0), node(zi, S_NODES, 1e-4, 0.99));
+            let k = (zi * S_NODES + mi) * S_NODES + ri;
+            for (eta, stored) in [(ior_of_z(z), data::GGX_GLASS_E[k]), (1.0 / ior_of_z(z), data::GGX_GLASS_INV_E[k])] {
+                assert!(
+                    (ggx_glass_albedo(r, m, eta, 96) as f32 - stored).abs() < 3e-3,
+                    "E_glass({r}, {m}, {eta}) = {stored}"
+                );
+            }
+        }
+        // A smooth interface keeps everything (reflection plus refraction).
+        assert!(glass_albedo(0.0, 0.7, 1.5) > 0.99 && glass_albedo(0.0, 0.7, 1.0 / 1.5) > 0.99);
+        assert!(glass_albedo(1.0, 0.7, 1.5) < 0.9);
     }
 
     #[test]
