@@ -42,7 +42,7 @@ fn light_contribution(
     if f == Rgb::ZERO || !(ls.pdf > 0.0) {
         return Rgb::ZERO;
     }
-    let origin = offset_ray_origin(p, sp.ng);
+    let origin = sp.ray_origin(p, ls.wi);
     counters.shadow_rays += 1;
     let occluded = if ls.distance.is_infinite() {
         scene.occluded(&Ray::new(origin, ls.wi), f32::INFINITY)
@@ -83,7 +83,7 @@ pub fn estimate_direct(
         LightStrategy::One(sampler) => {
             let u_select = stream.get_1d_u64(bounce, Dim::LightSelect, 0);
             let u_point = stream.get_2d_u64(bounce, Dim::LightPoint, 0);
-            let ctx = ShadingContext { p, n: sp.frame.n };
+            let ctx = ShadingContext { p, n: sp.selection_normal() };
             match sampler.sample_prefetching(&ctx, u_select, &scene.lights) {
                 Some(s) => {
                     debug_assert!(s.pmf > 0.0);

@@ -9,7 +9,7 @@
 use super::RayCounters;
 use super::direct::{estimate_direct, selection_pmf};
 use crate::film::FirstHit;
-use crate::geometry::{Ray, offset_ray_origin};
+use crate::geometry::Ray;
 use crate::light::{Light, LightId};
 use crate::light_sampler::{LightStrategy, ShadingContext};
 use crate::material::ShadingPoint;
@@ -95,7 +95,7 @@ pub fn radiance(
             break;
         }
         let material = &scene.materials[hit.material as usize];
-        let Some(bsdf) = material.bsdf(hit.uv, &scene.images) else { break };
+        let Some(bsdf) = material.bsdf(hit.uv, &scene.images, ray.dir.dot(hit.n_geom) < 0.0) else { break };
         let n_shading = material.mapped_normal(hit.n_shading, hit.dpdu, hit.dpdv, hit.uv, &scene.images);
         let sp = ShadingPoint::new(bsdf, hit.n_geom, n_shading, wo);
 
@@ -107,8 +107,8 @@ pub fn radiance(
         let u_dir = stream.get_2d(depth, Dim::BsdfDirection, 0);
         let Some(bs) = sp.sample(wo, u_lobe, u_dir) else { break };
         beta *= bs.weight;
-        prev = Some((ShadingContext { p: hit.p, n: sp.frame.n }, bs.pdf));
-        ray = Ray::new(offset_ray_origin(hit.p, sp.ng), bs.wi);
+        prev = Some((ShadingContext { p: hit.p, n: sp.selection_normal() }, bs.pdf));
+        ray = Ray::new(sp.ray_origin(hit.p, bs.wi), bs.wi);
         depth += 1;
 
         if depth >= RR_MIN_DEPTH {

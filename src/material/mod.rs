@@ -6,8 +6,8 @@
 //! geometric-normal test that stop light leaking through surfaces). Depends on `math`.
 //!
 //! Deviation from the architecture sketch: the closed set is {Lambertian, Principled} (the
-//! Principled BSDF as Cycles evaluates it for a glTF material: `principled.rs`); a conductor
-//! is metallic = 1 and there is no transmission yet.
+//! Principled BSDF as Cycles evaluates it for a glTF material, glass included:
+//! `principled.rs`); a conductor is metallic = 1, a glass transmission = 1.
 
 mod diffuse;
 pub mod fresnel;
@@ -37,10 +37,12 @@ pub struct BsdfSample {
 
 /// A BSDF at one point, in its local frame (normal = +Z, directions point away).
 #[derive(Clone, Copy, Debug)]
+// Built on the stack at every path vertex: boxing the large variant would allocate per bounce.
+#[allow(clippy::large_enum_variant)]
 pub enum Bsdf {
     /// Lambertian.
     Diffuse(Diffuse),
-    /// Cycles' Principled BSDF (metal, dielectric specular over diffuse).
+    /// Cycles' Principled BSDF (coat, metal, glass, dielectric specular over diffuse).
     Principled(Principled),
 }
 
@@ -61,6 +63,12 @@ impl Bsdf {
             Bsdf::Diffuse(b) => b.pdf(wo, wi),
             Bsdf::Principled(b) => b.pdf(wo, wi),
         }
+    }
+
+    /// True when the BSDF can send light through the surface (glass).
+    #[inline]
+    pub fn transmits(&self) -> bool {
+        matches!(self, Bsdf::Principled(p) if p.transmits())
     }
 
     /// Samples an incident direction; `u_lobe` picks a lobe, `u` the direction in it.
@@ -94,6 +102,8 @@ pub struct Material {
     pub specular_color: Rgb,
     /// Index of refraction of the dielectric (KHR_materials_ior, 1.5 by default), > 1.
     pub ior: f32,
+    /// Share of the dielectric that is glass (KHR_materials_transmission), in [0, 1].
+    pub transmission: f32,
     /// Weight of a clear coat on top (KHR_materials_clearcoat; Blender's Coat), in [0, 1].
     pub coat: f32,
     /// Perceptual roughness of the coat, in [0, 1].
@@ -141,6 +151,7 @@ impl Material {
             specular: 0.0,
             specular_color: Rgb::ONE,
             ior: 1.5,
+            transmission: 0.0,
             coat: 0.0,
             coat_roughness: 0.0,
             emission: Rgb::ZERO,
@@ -164,6 +175,7 @@ impl Material {
     pub fn model_name(&self) -> &'static str {
         match () {
             _ if self.base_color == Rgb::ZERO && self.is_emissive() && self.metallic == 0.0 => "emitter",
+            _ if self.transmission > 0.0 && self.metallic < 1.0 => "glass",
             _ if self.metallic == 0.0 && self.specular == 0.0 && self.coat == 0.0 => "lambert",
             _ if self.coat > 0.0 => "principled + coat",
             _ => "principled",
@@ -218,9 +230,11 @@ impl Material {
         (t * x + b * y + n * z).try_normalize().unwrap_or(n)
     }
 
-    /// The BSDF at `uv`, or `None` when the surface reflects nothing (a black emitter).
+    /// The BSDF at `uv` for a ray that meets the surface from its front (`entering`: into the
+    /// object, for glass) or its back, or `None` when the surface reflects nothing (a black
+    /// emitter).
     #[inline]
-    pub fn bsdf(&self, uv: Vec2, images: &[Image]) -> Option<Bsdf> {
+    pub fn bsdf(&self, uv: Vec2, images: &[Image], entering: bool) -> Option<Bsdf> {
         let base = self.base_color_at(uv, images);
         let (mut metallic, mut roughness) = (self.metallic, self.roughness);
         if let Some(t) = &self.metallic_roughness_texture {
@@ -228,14 +242,16 @@ impl Material {
             roughness *= v.y;
             metallic *= v.z;
         }
-        if metallic == 0.0 && self.specular == 0.0 && self.coat == 0.0 {
+        if metallic == 0.0 && self.specular == 0.0 && self.coat == 0.0 && self.transmission == 0.0 {
             if base.max_element() <= 0.0 {
                 return None;
             }
             return Some(Bsdf::Diffuse(Diffuse { albedo: base }));
         }
-        let p = Principled::new(base, metallic, roughness, self.ior, self.specular, self.specular_color);
-        Some(Bsdf::Principled(p.with_coat(self.coat, self.coat_roughness)))
+        let p = Principled::new(base, metallic, roughness, self.ior, self.specular, self.specular_color)
+            .with_coat(self.coat, self.coat_roughness)
+            .with_transmission(self.transmission, if entering { self.ior } else { 1.0 / self.ior });
+        Some(Bsdf::Principled(p))
     }
 }
 
@@ -248,6 +264,8 @@ pub struct ShadingPoint {
     pub ng: Vec3A,
     /// The BSDF.
     pub bsdf: Bsdf,
+    /// Whether light can pass through (then `wi` may lie on either side).
+    transmits: bool,
 }
 
 impl ShadingPoint {
@@ -256,26 +274,36 @@ impl ShadingPoint {
     pub fn new(bsdf: Bsdf, n_geom: Vec3A, n_shading: Vec3A, wo: Vec3A) -> Self {
         let ng = if n_geom.dot(wo) < 0.0 { -n_geom } else { n_geom };
         let ns = if n_shading.dot(ng) < 0.0 { -n_shading } else { n_shading };
-        Self { frame: Frame::from_normal(ns), ng, bsdf }
+        Self { frame: Frame::from_normal(ns), ng, bsdf, transmits: bsdf.transmits() }
     }
 
-    /// f(wo, wi)·|cos θi| for world directions; zero when `wi` goes below the geometric surface.
+    /// True when world direction `wi` is on a side the surface can send light to, with the
+    /// shading and geometric normals agreeing on which side that is (so that interpolated
+    /// normals never leak light through a surface).
+    #[inline]
+    fn allows(&self, wi: Vec3A, local: Vec3A) -> bool {
+        let above = wi.dot(self.ng) > 0.0;
+        (above || self.transmits) && above == (local.z > 0.0)
+    }
+
+    /// f(wo, wi)·|cos θi| for world directions.
     #[inline]
     pub fn eval_cos(&self, wo: Vec3A, wi: Vec3A) -> Rgb {
-        if wi.dot(self.ng) <= 0.0 {
+        let li = self.frame.to_local(wi);
+        if !self.allows(wi, li) {
             return Rgb::ZERO;
         }
-        let (lo, li) = (self.frame.to_local(wo), self.frame.to_local(wi));
-        self.bsdf.eval(lo, li) * li.z.abs()
+        self.bsdf.eval(self.frame.to_local(wo), li) * li.z.abs()
     }
 
     /// Density of sampling world direction `wi`.
     #[inline]
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
-        if wi.dot(self.ng) <= 0.0 {
+        let li = self.frame.to_local(wi);
+        if !self.allows(wi, li) {
             return 0.0;
         }
-        self.bsdf.pdf(self.frame.to_local(wo), self.frame.to_local(wi))
+        self.bsdf.pdf(self.frame.to_local(wo), li)
     }
 
     /// Samples a world direction.
@@ -283,6 +311,19 @@ impl ShadingPoint {
     pub fn sample(&self, wo: Vec3A, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         let s = self.bsdf.sample(self.frame.to_local(wo), u_lobe, u)?;
         let wi = self.frame.to_world(s.wi);
-        (wi.dot(self.ng) > 0.0).then_some(BsdfSample { wi, ..s })
+        self.allows(wi, s.wi).then_some(BsdfSample { wi, ..s })
+    }
+
+    /// Where a ray leaving `p` along `wi` starts: off the surface on `wi`'s side.
+    #[inline]
+    pub fn ray_origin(&self, p: Vec3A, wi: Vec3A) -> Vec3A {
+        crate::geometry::offset_ray_origin(p, if wi.dot(self.ng) >= 0.0 { self.ng } else { -self.ng })
+    }
+
+    /// The normal light selection weighs lights by (their horizon): none for surfaces that
+    /// let light through, whose lights may lie on either side.
+    #[inline]
+    pub fn selection_normal(&self) -> Vec3A {
+        if self.transmits { Vec3A::ZERO } else { self.frame.n }
     }
 }

@@ -1,10 +1,12 @@
-//! The Principled BSDF as Cycles (Blender 4.x/5.0) evaluates it for a glTF material, without
-//! transmission: an optional coat over a metal mixed by `metallic` with a dielectric specular
-//! layer over a Lambertian base.
+//! The Principled BSDF as Cycles (Blender 4.x/5.0) evaluates it for a glTF material: an
+//! optional coat over a metal mixed by `metallic` with glass (by `transmission`) and with a
+//! dielectric specular layer over a Lambertian base.
 //!
 //! ```text
 //! f = k·F_c(v·h)·GGX_c·c_coat + (1 − k·A_coat(μo))·f_below            (coat weight k, IOR 1.5)
-//! f_below = m·F82(v·h)·GGX·c_metal + (1−m)·[ F_d(v·h)·GGX·c_spec + (1 − max_rgb A_spec(μo))·base/π ]
+//! f_below = m·F82(v·h)·GGX·c_metal + (1−m)·t·f_glass
+//!         + (1−m)·(1−t)·[ F_d(v·h)·GGX·c_spec + (1 − max_rgb A_spec(μo))·base/π ]
+//! f_glass = F(v·h, η)·GGX_reflect + (1 − F)·√base·GGX_refract (Walter et al. 2007), ·c_glass
 //! GGX     = D(h)·G2/(4·μo·μi), α = roughness²
 //! F82     = Schlick from F0 = base with Cycles' 82° tint (specular colour, white by default)
 //! F_d     = mix(F0_d, 1, s(v·h)), s = (F_exact(v·h, η′) − F0(η′)) / (1 − F0(η′)),
@@ -16,7 +18,11 @@
 //! The base is attenuated by the specular layer's albedo towards the viewer, one number for
 //! all channels, as Cycles' `closure_layering_weight` does; so the model is not reciprocal
 //! (nor is Cycles'). With `specularFactor` 0 (η′ = 1) there is no specular layer and the base
-//! is exactly Lambertian. Lobes are chosen in proportion to their albedo estimates.
+//! is exactly Lambertian. Glass is Cycles' solid refraction: η is the relative IOR across the
+//! surface as the ray meets it (ior entering, 1/ior leaving), each crossing transmits √base
+//! (so a closed object tints by `base`), and the refracted value carries no η² of radiance
+//! compression (Cycles' sampled weight is T·G2/G1); its compensation uses the glass tables
+//! with F_avg = √base. Lobes are chosen in proportion to their albedo estimates.
 
 use super::BsdfSample;
 use super::fresnel::{self, F82Tint};
@@ -85,6 +91,43 @@ struct Coat {
 /// The coat's IOR (Blender's default; glTF's clearcoat has none of its own).
 const COAT_IOR: f32 = 1.5;
 
+/// Cycles' solid glass: refraction into (or out of) the object behind the surface.
+#[derive(Clone, Copy, Debug)]
+struct Glass {
+    /// Share of the dielectric that is glass (glTF transmission), in (0, 1].
+    weight: f32,
+    /// Relative IOR: the far side's over the viewer's.
+    eta: f32,
+    /// What one crossing transmits: √base.
+    tint: Rgb,
+}
+
+impl Glass {
+    /// The probability of reflecting at a facet of Fresnel `f`.
+    #[inline]
+    fn reflect_probability(&self, f: f32) -> f32 {
+        let t = (1.0 - f) * mean(self.tint);
+        if f + t > 0.0 { f / (f + t) } else { 1.0 }
+    }
+
+    /// The half vector of `wo` refracted to `wi` (on the upper side), with the Jacobian of
+    /// the half vector against `wi` and the two cosines; `None` when no facet refracts one
+    /// into the other.
+    #[inline]
+    fn refraction(&self, wo: Vec3A, wi: Vec3A) -> Option<(Vec3A, f32, f32, f32)> {
+        let h = -(wo + wi * self.eta);
+        let h = h.try_normalize()?;
+        let h = if h.z < 0.0 { -h } else { h };
+        let (cos_o, cos_i) = (wo.dot(h), wi.dot(h));
+        if !(cos_o > 0.0 && cos_i < 0.0) {
+            return None;
+        }
+        let denominator = cos_o + self.eta * cos_i;
+        let jacobian = self.eta * self.eta * cos_i.abs() / (denominator * denominator);
+        Some((h, jacobian, cos_o, cos_i))
+    }
+}
+
 /// The model at one surface point.
 #[derive(Clone, Copy, Debug)]
 pub struct Principled {
@@ -95,6 +138,7 @@ pub struct Principled {
     metal: F82Tint,
     specular: Option<Specular>,
     coat: Option<Coat>,
+    glass: Option<Glass>,
 }
 
 /// What depends on the outgoing direction: the lobes' weights and the choice between them.
@@ -102,11 +146,13 @@ struct View {
     coat: f32,
     metal: Rgb,
     specular: Rgb,
+    glass: Rgb,
     diffuse: Rgb,
-    /// Probabilities of sampling the coat's GGX lobe and the base's (metal and specular
-    /// share one distribution); the rest goes to the diffuse lobe.
+    /// Probabilities of sampling the coat's GGX lobe, the base's (metal and specular share
+    /// one distribution) and the glass's; the rest goes to the diffuse lobe.
     p_coat: f32,
     p_glossy: f32,
+    p_glass: f32,
 }
 
 fn mean(c: Rgb) -> f32 {
@@ -125,7 +171,21 @@ impl Principled {
             metal: F82Tint::new(base.min(Rgb::ONE), specular_color.min(Rgb::ONE)),
             specular: Specular::new(ior, specular, specular_color),
             coat: None,
+            glass: None,
         }
+    }
+
+    /// The same with `transmission` (in [0, 1]) of its dielectric as glass, met at relative
+    /// IOR `eta` (ior when the ray enters the object, 1/ior when it leaves).
+    pub fn with_transmission(self, transmission: f32, eta: f32) -> Self {
+        let tint = Rgb::new(self.base.x.sqrt(), self.base.y.sqrt(), self.base.z.sqrt());
+        let glass = (transmission > 0.0 && eta != 1.0).then_some(Glass { weight: transmission, eta, tint });
+        Self { glass, ..self }
+    }
+
+    /// True when light can pass through (the BSDF has a refraction lobe).
+    pub fn transmits(&self) -> bool {
+        self.glass.is_some()
     }
 
     /// The same with a coat of `weight` and `roughness` (both in [0, 1]) on top.
@@ -140,7 +200,17 @@ impl Principled {
         let (e, e_avg) = (tables::albedo(self.roughness, mu), tables::albedo_average(self.roughness));
         let (metal_gain, _) = compensation(e, e_avg, self.metal.average());
         let metal = metal_gain * self.metallic;
-        let dielectric = 1.0 - self.metallic;
+        let transmission = self.glass.map_or(0.0, |g| g.weight);
+        let dielectric = (1.0 - self.metallic) * (1.0 - transmission);
+        let (glass, glass_albedo) = match &self.glass {
+            Some(g) => {
+                let e = tables::glass_albedo(self.roughness, mu, g.eta);
+                let (gain, kept) = compensation(e, tables::glass_albedo_average(self.roughness, g.eta), g.tint);
+                let weight = (1.0 - self.metallic) * g.weight;
+                (gain * weight, weight * mean(kept))
+            }
+            None => (Rgb::ZERO, 0.0),
+        };
         let (specular, layer_albedo) = match &self.specular {
             Some(s) => {
                 let (gain, kept) = compensation(e, e_avg, s.average);
@@ -162,41 +232,71 @@ impl Principled {
             }
             None => (0.0, 0.0, 1.0),
         };
-        let (glossy, diffuse_albedo) = (below * glossy, below * mean(diffuse) * std::f32::consts::PI);
-        let total = coat_albedo + glossy + diffuse_albedo;
+        let (glossy, glass_albedo) = (below * glossy, below * glass_albedo);
+        let diffuse_albedo = below * mean(diffuse) * std::f32::consts::PI;
+        let total = coat_albedo + glossy + glass_albedo + diffuse_albedo;
         let p = |x: f32| if total > 0.0 { x / total } else { 0.0 };
         View {
             coat,
             metal: metal * below,
             specular: specular * below,
+            glass: glass * below,
             diffuse: diffuse * below,
             p_coat: p(coat_albedo),
             p_glossy: p(glossy),
+            p_glass: p(glass_albedo),
         }
     }
 
     #[inline]
     fn eval_view(&self, v: &View, wo: Vec3A, wi: Vec3A) -> Rgb {
+        if wi.z < 0.0 {
+            return self.glass.map_or(Rgb::ZERO, |g| {
+                let Some((h, _, cos_o, cos_i)) = g.refraction(wo, wi) else { return Rgb::ZERO };
+                let f = fresnel::dielectric(cos_o, g.eta);
+                let denominator = cos_o + g.eta * cos_i;
+                let geometry = self.ggx.d(h) * self.ggx.g2(wo, wi) * g.eta * g.eta * cos_o * cos_i.abs()
+                    / (wo.z * wi.z.abs() * denominator * denominator);
+                g.tint * v.glass * ((1.0 - f) * geometry)
+            });
+        }
         let h = (wo + wi).normalize();
         let mu = wo.dot(h).max(0.0);
         let lobe = |g: &Ggx| g.d(h) * g.g2(wo, wi) / (4.0 * wo.z * wi.z);
         let specular = self.specular.map_or(Rgb::ZERO, |s| s.fresnel(mu) * v.specular);
+        let glass = self.glass.map_or(Rgb::ZERO, |g| v.glass * fresnel::dielectric(mu, g.eta));
         let coat = self.coat.map_or(Rgb::ZERO, |c| c.layer.fresnel(mu) * (v.coat * lobe(&c.ggx)));
-        coat + (self.metal.eval(mu) * v.metal + specular) * lobe(&self.ggx) + v.diffuse
+        coat + (self.metal.eval(mu) * v.metal + specular + glass) * lobe(&self.ggx) + v.diffuse
     }
 
     #[inline]
     fn pdf_view(&self, v: &View, wo: Vec3A, wi: Vec3A) -> f32 {
+        if wi.z < 0.0 {
+            return self.glass.map_or(0.0, |g| {
+                let Some((h, jacobian, cos_o, _)) = g.refraction(wo, wi) else { return 0.0 };
+                let visible = self.ggx.g1(wo) * cos_o * self.ggx.d(h) / wo.z;
+                v.p_glass * (1.0 - g.reflect_probability(fresnel::dielectric(cos_o, g.eta))) * visible * jacobian
+            });
+        }
         let h = (wo + wi).normalize();
         let coat = self.coat.map_or(0.0, |c| v.p_coat * c.ggx.reflection_pdf(wo, h));
-        let diffuse = (1.0 - v.p_coat - v.p_glossy).max(0.0);
-        coat + v.p_glossy * self.ggx.reflection_pdf(wo, h) + diffuse * cosine_hemisphere_pdf(wi.z)
+        let glass = self.glass.map_or(0.0, |g| {
+            v.p_glass * g.reflect_probability(fresnel::dielectric(wo.dot(h), g.eta)) * self.ggx.reflection_pdf(wo, h)
+        });
+        let diffuse = (1.0 - v.p_coat - v.p_glossy - v.p_glass).max(0.0);
+        coat + glass + v.p_glossy * self.ggx.reflection_pdf(wo, h) + diffuse * cosine_hemisphere_pdf(wi.z)
+    }
+
+    /// True when `wi` is on a side of the surface the model can send light to.
+    #[inline]
+    fn reaches(&self, wo: Vec3A, wi: Vec3A) -> bool {
+        wo.z > 0.0 && (wi.z > 0.0 || (wi.z < 0.0 && self.glass.is_some()))
     }
 
     /// BSDF value (without the cosine).
     #[inline]
     pub fn eval(&self, wo: Vec3A, wi: Vec3A) -> Rgb {
-        if wo.z <= 0.0 || wi.z <= 0.0 {
+        if !self.reaches(wo, wi) {
             return Rgb::ZERO;
         }
         self.eval_view(&self.view(wo.z), wo, wi)
@@ -205,7 +305,7 @@ impl Principled {
     /// Solid-angle density of [`Principled::sample`].
     #[inline]
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
-        if wo.z <= 0.0 || wi.z <= 0.0 {
+        if !self.reaches(wo, wi) {
             return 0.0;
         }
         self.pdf_view(&self.view(wo.z), wo, wi)
@@ -222,18 +322,31 @@ impl Principled {
             let h = g.sample_visible_normal(wo, u);
             2.0 * wo.dot(h) * h - wo
         };
-        let wi = match (u_lobe < v.p_coat, u_lobe < v.p_coat + v.p_glossy, &self.coat) {
-            (true, _, Some(c)) => reflect(&c.ggx),
+        let glass_from = v.p_coat + v.p_glossy;
+        let wi = match (u_lobe < v.p_coat, u_lobe < glass_from, u_lobe < glass_from + v.p_glass) {
+            (true, _, _) => reflect(&self.coat?.ggx),
             (_, true, _) => reflect(&self.ggx),
+            (_, _, true) => {
+                // The rest of the lobe number decides between reflection and refraction.
+                // A direction on the wrong side for its lobe is dropped, as Cycles does.
+                let g = self.glass?;
+                let h = self.ggx.sample_visible_normal(wo, u);
+                let f = fresnel::dielectric(wo.dot(h), g.eta);
+                if (u_lobe - glass_from) / v.p_glass < g.reflect_probability(f) {
+                    Some(2.0 * wo.dot(h) * h - wo).filter(|wi| wi.z > 0.0)?
+                } else {
+                    super::microfacet::refract(wo, h, g.eta).filter(|wi| wi.z < 0.0)?
+                }
+            }
             _ => square_to_cosine_hemisphere(u),
         };
-        if wi.z <= 0.0 {
+        if !self.reaches(wo, wi) {
             return None;
         }
         let pdf = self.pdf_view(&v, wo, wi);
         if !(pdf > 0.0) {
             return None;
         }
-        Some(BsdfSample { wi, weight: self.eval_view(&v, wo, wi) * (wi.z / pdf), pdf })
+        Some(BsdfSample { wi, weight: self.eval_view(&v, wo, wi) * (wi.z.abs() / pdf), pdf })
     }
 }

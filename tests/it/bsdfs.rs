@@ -15,6 +15,18 @@ fn principled(base: Rgb, metallic: f32, roughness: f32, ior: f32, specular: f32,
     Bsdf::Principled(Principled::new(base, metallic, roughness, ior, specular, color))
 }
 
+/// Glass of `base` and `roughness`, met at relative IOR `eta`.
+fn glass(base: Rgb, roughness: f32, eta: f32) -> Bsdf {
+    let Bsdf::Principled(p) = principled(base, 0.0, roughness, 1.5, 1.0, Rgb::ONE) else { unreachable!() };
+    Bsdf::Principled(p.with_transmission(1.0, eta))
+}
+
+/// A dielectric half glass, half plastic.
+fn half_glass() -> Bsdf {
+    let Bsdf::Principled(p) = principled(Rgb::new(0.8, 0.5, 0.3), 0.0, 0.4, 1.5, 1.0, Rgb::ONE) else { unreachable!() };
+    Bsdf::Principled(p.with_transmission(0.5, 1.5))
+}
+
 /// `b` under a full coat of roughness `roughness`.
 fn coated(b: Bsdf, roughness: f32) -> Bsdf {
     let Bsdf::Principled(p) = b else { unreachable!("only Principled takes a coat") };
@@ -35,6 +47,10 @@ fn bsdfs() -> Vec<(&'static str, Bsdf)> {
             "coated paint r0.5, coat r0.3",
             coated(principled(Rgb::new(0.5, 0.02, 0.3), 0.0, 0.5, 1.5, 1.0, Rgb::ONE), 0.3),
         ),
+        ("glass r0.3 entering", glass(Rgb::ONE, 0.3, 1.5)),
+        ("glass r0.5 leaving", glass(Rgb::ONE, 0.5, 1.0 / 1.5)),
+        ("tinted glass r0.4 ior 1.45", glass(Rgb::new(0.6, 0.9, 0.7), 0.4, 1.45)),
+        ("half glass, half plastic r0.4", half_glass()),
     ]
 }
 
@@ -62,10 +78,10 @@ fn sample_weight_and_pdf_agree_with_eval() {
             for i in 0..4000 {
                 let (ul, u) = u2(i, 1);
                 let Some(s) = b.sample(wo, ul, u) else { continue };
-                assert!(s.wi.z > 0.0 && (s.wi.length() - 1.0).abs() < 1e-4, "{name}");
+                assert!((s.wi.z > 0.0 || b.transmits()) && (s.wi.length() - 1.0).abs() < 1e-4, "{name}");
                 let pdf = b.pdf(wo, s.wi);
                 assert!((pdf - s.pdf).abs() <= 1e-4 * pdf, "{name}: pdf {} vs {pdf}", s.pdf);
-                let expect = b.eval(wo, s.wi) * s.wi.z / s.pdf;
+                let expect = b.eval(wo, s.wi) * s.wi.z.abs() / s.pdf;
                 assert!(
                     (expect - s.weight).abs().max_element() <= 1e-4 * expect.max_element().max(1e-3),
                     "{name}: weight"
@@ -79,7 +95,7 @@ fn sample_weight_and_pdf_agree_with_eval() {
 fn a_dielectric_without_specular_is_exactly_lambertian() {
     let base = Rgb::new(0.73, 0.5, 0.1);
     let material = Material { roughness: 0.4, ..Material::diffuse("m", base) };
-    assert!(matches!(material.bsdf(Vec2::ZERO, &[]), Some(Bsdf::Diffuse(d)) if d.albedo == base));
+    assert!(matches!(material.bsdf(Vec2::ZERO, &[], true), Some(Bsdf::Diffuse(d)) if d.albedo == base));
     // And the Principled model itself at specular 0 has no layer on its base.
     let a = principled(base, 0.0, 0.4, 1.5, 0.0, Rgb::ONE);
     let d = Diffuse { albedo: base };
@@ -147,6 +163,8 @@ fn a_white_metal_keeps_its_energy_and_nothing_gains_any() {
         principled(Rgb::ONE, 0.5, 0.5, 2.0, 1.0, Rgb::ONE),
         coated(principled(Rgb::ONE, 0.0, 0.5, 1.5, 1.0, Rgb::ONE), 0.1),
         coated(principled(Rgb::ONE, 1.0, 0.3, 1.5, 1.0, Rgb::ONE), 0.5),
+        glass(Rgb::ONE, 0.3, 1.5),
+        glass(Rgb::ONE, 0.7, 1.0 / 1.5),
     ];
     for b in whites {
         for (cos_o, slack) in [(1.0f32, 0.0), (0.7, 0.0), (0.3, 0.0), (0.05, 0.035)] {
@@ -156,9 +174,10 @@ fn a_white_metal_keeps_its_energy_and_nothing_gains_any() {
     }
 }
 
-/// The (cos θ, φ) cell of direction `wi` among `nz × nphi`.
+/// The (cos θ, φ) cell of direction `wi` among `nz × nphi` over the whole sphere (cos θ from
+/// −1 to 1: the lower half holds refraction).
 fn cell_of(wi: Vec3A, nz: usize, nphi: usize) -> usize {
-    let z = ((wi.z * nz as f32) as usize).min(nz - 1);
+    let z = (((wi.z + 1.0) * 0.5 * nz as f32) as usize).min(nz - 1);
     let phi = (wi.y.atan2(wi.x) as f64 + 2.0 * PI) % (2.0 * PI);
     z * nphi + ((phi / (2.0 * PI) * nphi as f64) as usize).min(nphi - 1)
 }
@@ -166,11 +185,11 @@ fn cell_of(wi: Vec3A, nz: usize, nphi: usize) -> usize {
 /// `f(wo, wi)` over cell `(zi, pi)` of `nz × nphi`, by the midpoint rule on `sub × sub`
 /// points (dω = dz dφ).
 fn integrate_cell(f: &dyn Fn(Vec3A) -> f64, zi: usize, pi: usize, (nz, nphi, sub): (usize, usize, usize)) -> f64 {
-    let (dz, dphi) = (1.0 / nz as f64, 2.0 * PI / nphi as f64);
+    let (dz, dphi) = (2.0 / nz as f64, 2.0 * PI / nphi as f64);
     let mut acc = 0.0;
     for a in 0..sub {
         for c in 0..sub {
-            let z = (zi as f64 + (a as f64 + 0.5) / sub as f64) * dz;
+            let z = -1.0 + (zi as f64 + (a as f64 + 0.5) / sub as f64) * dz;
             let phi = (pi as f64 + (c as f64 + 0.5) / sub as f64) * dphi;
             let r = (1.0 - z * z).max(0.0).sqrt();
             acc += f(Vec3A::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32));
@@ -184,7 +203,7 @@ fn sampled_weights_integrate_to_eval_in_every_cell() {
     // E[weight · 1{wi ∈ cell}] = ∫_cell f(wo, wi) cos θi dω for each (cos θ, φ) cell: the
     // weights a sampler returns are checked against `eval` alone. Per cell, z = (sum − n·∫)/σ
     // with σ from the weights' own spread; Σ z² over cells is chi-square.
-    let grid = (8usize, 16usize, 16usize);
+    let grid = (16usize, 16usize, 16usize);
     let (cases, alpha) = cases();
     for (name, b, wo) in cases {
         let n = 200_000u64;
@@ -200,7 +219,7 @@ fn sampled_weights_integrate_to_eval_in_every_cell() {
             }
         }
         let f = |wi: Vec3A| {
-            let v = b.eval(wo, wi) * wi.z;
+            let v = b.eval(wo, wi) * wi.z.abs();
             (v.x + v.y + v.z) as f64
         };
         let (mut chi2, mut dof, mut pooled) = (0.0, 0usize, (0.0, 0.0, 0.0));
@@ -233,7 +252,7 @@ fn sampled_weights_integrate_to_eval_in_every_cell() {
 /// cell, plus one cell for failed samples (mass the pdf does not cover).
 #[test]
 fn sampled_directions_follow_the_pdf() {
-    let grid = (16usize, 32usize, 6usize);
+    let grid = (32usize, 32usize, 16usize);
     let (cases, alpha) = cases();
     for (name, b, wo) in cases {
         let n = 200_000u64;

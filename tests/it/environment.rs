@@ -52,6 +52,59 @@ fn a_lambertian_sphere_in_a_white_furnace_reflects_its_albedo() {
     }
 }
 
+#[test]
+fn a_white_glass_sphere_in_a_white_furnace_neither_gains_nor_loses() {
+    // Rough, lossless glass under a constant sky: whatever path a ray takes through it, it
+    // ends on the sky, so every pixel is 1 but for the little the depth limit cuts off.
+    let dir = tempfile::tempdir().unwrap();
+    let path = scene_file(
+        dir.path(),
+        r#"camera: Perspective(eye: (0, 0, 4), look_at: (0, 0, 0), yfov_deg: 30),
+           objects: [ Mesh(path: "sphere.gltf") ],
+           environment: Constant(radiance: (1, 1, 1))"#,
+    );
+    // A sphere of glass as a glTF (RON has no glass material), from the RON sphere's triangles.
+    let sphere = myriad::scene::shapes::sphere_mesh("sphere", Vec3A::ZERO, 1.0, 5, 0);
+    write_gltf_mesh(&dir.path().join("sphere.gltf"), &sphere.positions, &sphere.triangles);
+    let scene = load(&path, Some(UVec2::new(16, 16)), None).unwrap();
+    let film = render_with(&scene, LightSamplerKind::Tree, 256, 16, 1);
+    for i in [8 * 16 + 8, 6 * 16 + 7, 0] {
+        let (m, v) = (film.mean(i), film.variance_of_mean(i));
+        assert!(
+            m.x > 0.97 - 5.0 * v.x.sqrt() && m.x < 1.0 + 5.0 * v.x.sqrt() + 1e-3,
+            "pixel {i}: {} ± {}",
+            m.x,
+            v.x.sqrt()
+        );
+    }
+}
+
+/// Writes a glTF holding one mesh of rough white glass.
+fn write_gltf_mesh(path: &Path, positions: &[Vec3A], triangles: &[[u32; 3]]) {
+    let mut bytes: Vec<u8> = positions.iter().flat_map(|p| [p.x, p.y, p.z]).flat_map(f32::to_le_bytes).collect();
+    let index_offset = bytes.len();
+    bytes.extend(triangles.iter().flatten().flat_map(|i| i.to_le_bytes()));
+    let (lo, hi) =
+        positions.iter().fold((Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN)), |(a, b), &p| (a.min(p), b.max(p)));
+    std::fs::write(path.with_extension("bin"), &bytes).unwrap();
+    let uri = path.with_extension("bin").file_name().unwrap().to_string_lossy().into_owned();
+    let doc = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 0.4},
+                       "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1}}}],
+        "extensionsUsed": ["KHR_materials_transmission"],
+        "buffers": [{"byteLength": bytes.len(), "uri": uri}],
+        "bufferViews": [{"buffer": 0, "byteLength": index_offset}, {"buffer": 0, "byteOffset": index_offset, "byteLength": bytes.len() - index_offset}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": positions.len(), "type": "VEC3", "min": lo.to_array(), "max": hi.to_array()},
+            {"bufferView": 1, "componentType": 5125, "count": triangles.len() * 3, "type": "SCALAR"}
+        ]
+    });
+    std::fs::write(path, doc.to_string()).unwrap();
+}
+
 /// A small map with a bright spot, a dim sky gradient and a black lower half.
 fn test_map() -> (u32, u32, impl Fn(u32, u32) -> Rgb) {
     let (w, h) = (32u32, 16u32);

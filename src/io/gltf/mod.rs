@@ -34,8 +34,9 @@ use crate::math::{Mat4, Rgb, Vec2, Vec3A};
 use crate::scene::description::{CameraDesc, CameraPlacement, InstanceDesc, LightDesc, MeshDesc, SceneDescription};
 
 /// Extensions myriad reads. Others are listed in one warning.
-const SUPPORTED: [&str; 6] = [
+const SUPPORTED: [&str; 7] = [
     "KHR_materials_clearcoat",
+    "KHR_materials_transmission",
     "KHR_materials_emissive_strength",
     "KHR_materials_specular",
     "KHR_materials_ior",
@@ -248,6 +249,7 @@ impl Loader<'_> {
                 specular: m.specular().map_or(1.0, |s| s.specular_factor()),
                 specular_color: m.specular().map_or(Rgb::ONE, |s| Rgb::from(s.specular_color_factor())),
                 ior: m.ior().unwrap_or(1.5),
+                transmission: m.transmission().map_or(0.0, |t| t.transmission_factor()),
                 coat: clearcoat.0,
                 coat_roughness: clearcoat.1,
                 emission: Rgb::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0),
@@ -483,8 +485,8 @@ const UNRENDERED_EXTENSIONS: [&str; 8] = [
 fn ignored_properties(m: &gltf::Material) -> Vec<String> {
     let mut ignored: Vec<String> =
         UNRENDERED_EXTENSIONS.iter().filter(|e| m.extension_value(e).is_some()).map(|e| e.to_string()).collect();
-    if m.transmission().is_some() {
-        ignored.push("KHR_materials_transmission".into());
+    if m.transmission().is_some_and(|t| t.transmission_texture().is_some()) {
+        ignored.push("KHR_materials_transmission.transmissionTexture".into());
     }
     if m.volume().is_some() {
         ignored.push("KHR_materials_volume".into());
