@@ -24,7 +24,8 @@ pub fn selection_pmf(strategy: &LightStrategy, ctx: &ShadingContext, light: Ligh
     }
 }
 
-/// The contribution of one chosen light, divided by its selection probability `pmf`.
+/// The contribution of one chosen light, divided by its selection probability `pmf`, through
+/// the volume of absorption `medium` the point lies in.
 #[inline]
 #[allow(clippy::too_many_arguments)]
 fn light_contribution(
@@ -34,6 +35,7 @@ fn light_contribution(
     sp: &ShadingPoint,
     p: Vec3A,
     wo: Vec3A,
+    medium: Rgb,
     u: [u64; 2],
     counters: &mut RayCounters,
 ) -> Rgb {
@@ -54,10 +56,15 @@ fn light_contribution(
         return Rgb::ZERO;
     }
     let weight = if light.is_delta() { 1.0 } else { power_heuristic(pmf * ls.pdf, sp.pdf(wo, ls.wi)) };
-    f * ls.radiance * (weight / (pmf * ls.pdf))
+    // Only a light on this side of the surface is reached through the volume the point is in;
+    // towards the far side the ray leaves it at once.
+    let inside = medium != Rgb::ZERO && ls.wi.dot(sp.ng) > 0.0;
+    let through = if inside { super::path::transmittance(medium, ls.distance) } else { Rgb::ONE };
+    f * ls.radiance * through * (weight / (pmf * ls.pdf))
 }
 
-/// Direct light reflected towards `wo` at surface point `p`, estimated with `strategy`.
+/// Direct light reflected towards `wo` at surface point `p` (inside a volume of absorption
+/// `medium`, zero outside), estimated with `strategy`.
 #[inline]
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_direct(
@@ -66,6 +73,7 @@ pub fn estimate_direct(
     sp: &ShadingPoint,
     p: Vec3A,
     wo: Vec3A,
+    medium: Rgb,
     stream: &SampleStream,
     bounce: u32,
     counters: &mut RayCounters,
@@ -77,7 +85,7 @@ pub fn estimate_direct(
             .enumerate()
             .map(|(i, light)| {
                 let u = stream.get_2d_u64(bounce, Dim::LightPoint, i as u32);
-                light_contribution(scene, light, 1.0, sp, p, wo, u, counters)
+                light_contribution(scene, light, 1.0, sp, p, wo, medium, u, counters)
             })
             .fold(Rgb::ZERO, |a, b| a + b),
         LightStrategy::One(sampler) => {
@@ -87,7 +95,8 @@ pub fn estimate_direct(
             match sampler.sample_prefetching(&ctx, u_select, &scene.lights) {
                 Some(s) => {
                     debug_assert!(s.pmf > 0.0);
-                    light_contribution(scene, &scene.lights[s.light.0 as usize], s.pmf, sp, p, wo, u_point, counters)
+                    let light = &scene.lights[s.light.0 as usize];
+                    light_contribution(scene, light, s.pmf, sp, p, wo, medium, u_point, counters)
                 }
                 None => Rgb::ZERO,
             }

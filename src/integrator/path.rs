@@ -29,6 +29,13 @@ pub struct PathSample {
     pub first_hit: Option<FirstHit>,
 }
 
+/// What a path keeps of its light over `distance` in a volume of absorption `sigma`.
+#[inline]
+pub fn transmittance(sigma: Rgb, distance: f32) -> Rgb {
+    let d = -sigma * distance;
+    Rgb::new(d.x.exp(), d.y.exp(), d.z.exp())
+}
+
 /// Radiance from the environment along `dir` for a ray that left the scene, MIS-weighted
 /// against next-event estimation when the ray was found by BSDF sampling at `prev`.
 #[inline]
@@ -63,6 +70,8 @@ pub fn radiance(
     // The previous vertex, for MIS at emitter hits: its light-sampling context and the
     // density with which its BSDF chose `ray`.
     let mut prev: Option<(ShadingContext, f32)> = None;
+    // The absorption of the glass the ray travels through (zero outside any).
+    let mut medium = Rgb::ZERO;
     let mut depth = 0u32;
     loop {
         counters.rays += 1;
@@ -70,6 +79,9 @@ pub fn radiance(
             l += beta * escaped(scene, strategy, ray.dir.normalize(), prev);
             break;
         };
+        if medium != Rgb::ZERO {
+            beta *= transmittance(medium, hit.t * ray.dir.length());
+        }
         let wo = -ray.dir.normalize();
         if depth == 0 {
             let n = if hit.n_shading.dot(wo) < 0.0 { -hit.n_shading } else { hit.n_shading };
@@ -100,13 +112,19 @@ pub fn radiance(
         let sp = ShadingPoint::new(bsdf, hit.n_geom, n_shading, wo);
 
         if !scene.lights.is_empty() {
-            l += beta * estimate_direct(scene, strategy, &sp, hit.p, wo, stream, depth, counters);
+            l += beta * estimate_direct(scene, strategy, &sp, hit.p, wo, medium, stream, depth, counters);
         }
 
         let u_lobe = stream.get_1d(depth, Dim::BsdfLobe, 0);
         let u_dir = stream.get_2d(depth, Dim::BsdfDirection, 0);
         let Some(bs) = sp.sample(wo, u_lobe, u_dir) else { break };
         beta *= bs.weight;
+        // Refracting into a solid glass object puts the ray in its volume; out of one, back
+        // outside (objects are not nested).
+        if bs.wi.dot(sp.ng) < 0.0 && !material.thin {
+            let entering = ray.dir.dot(hit.n_geom) < 0.0;
+            medium = if entering { material.absorption } else { Rgb::ZERO };
+        }
         prev = Some((ShadingContext { p: hit.p, n: sp.selection_normal() }, bs.pdf));
         ray = Ray::new(sp.ray_origin(hit.p, bs.wi), bs.wi);
         depth += 1;

@@ -104,6 +104,12 @@ pub struct Material {
     pub ior: f32,
     /// Share of the dielectric that is glass (KHR_materials_transmission), in [0, 1].
     pub transmission: f32,
+    /// The glass is a sheet of no thickness (glTF transmission without a volume) rather than
+    /// the surface of a solid.
+    pub thin: bool,
+    /// Absorption coefficient inside a solid glass object [1/m] (KHR_materials_volume):
+    /// light travelling a distance d inside keeps exp(−σ·d).
+    pub absorption: Rgb,
     /// Weight of a clear coat on top (KHR_materials_clearcoat; Blender's Coat), in [0, 1].
     pub coat: f32,
     /// Perceptual roughness of the coat, in [0, 1].
@@ -152,6 +158,8 @@ impl Material {
             specular_color: Rgb::ONE,
             ior: 1.5,
             transmission: 0.0,
+            thin: false,
+            absorption: Rgb::ZERO,
             coat: 0.0,
             coat_roughness: 0.0,
             emission: Rgb::ZERO,
@@ -175,6 +183,8 @@ impl Material {
     pub fn model_name(&self) -> &'static str {
         match () {
             _ if self.base_color == Rgb::ZERO && self.is_emissive() && self.metallic == 0.0 => "emitter",
+            _ if self.transmission > 0.0 && self.metallic < 1.0 && self.thin => "thin glass",
+            _ if self.transmission > 0.0 && self.metallic < 1.0 && self.absorption != Rgb::ZERO => "glass + volume",
             _ if self.transmission > 0.0 && self.metallic < 1.0 => "glass",
             _ if self.metallic == 0.0 && self.specular == 0.0 && self.coat == 0.0 => "lambert",
             _ if self.coat > 0.0 => "principled + coat",
@@ -249,8 +259,12 @@ impl Material {
             return Some(Bsdf::Diffuse(Diffuse { albedo: base }));
         }
         let p = Principled::new(base, metallic, roughness, self.ior, self.specular, self.specular_color)
-            .with_coat(self.coat, self.coat_roughness)
-            .with_transmission(self.transmission, if entering { self.ior } else { 1.0 / self.ior });
+            .with_coat(self.coat, self.coat_roughness);
+        let p = if self.thin {
+            p.with_thin_transmission(self.transmission, self.ior)
+        } else {
+            p.with_transmission(self.transmission, if entering { self.ior } else { 1.0 / self.ior })
+        };
         Some(Bsdf::Principled(p))
     }
 }

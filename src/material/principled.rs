@@ -22,7 +22,9 @@
 //! surface as the ray meets it (ior entering, 1/ior leaving), each crossing transmits √base
 //! (so a closed object tints by `base`), and the refracted value carries no η² of radiance
 //! compression (Cycles' sampled weight is T·G2/G1); its compensation uses the glass tables
-//! with F_avg = √base. Lobes are chosen in proportion to their albedo estimates.
+//! with F_avg = √base. A thin-walled sheet (glTF without a volume) transmits base along the
+//! reflection mirrored through the surface. Lobes are chosen in proportion to their albedo
+//! estimates.
 
 use super::BsdfSample;
 use super::fresnel::{self, F82Tint};
@@ -91,15 +93,27 @@ struct Coat {
 /// The coat's IOR (Blender's default; glTF's clearcoat has none of its own).
 const COAT_IOR: f32 = 1.5;
 
-/// Cycles' solid glass: refraction into (or out of) the object behind the surface.
+/// Glass: refraction into (or out of) the object behind the surface (Cycles' solid glass),
+/// or, thin-walled, straight through a sheet of no thickness (glTF's default without
+/// KHR_materials_volume).
 #[derive(Clone, Copy, Debug)]
 struct Glass {
     /// Share of the dielectric that is glass (glTF transmission), in (0, 1].
     weight: f32,
-    /// Relative IOR: the far side's over the viewer's.
+    /// Relative IOR: the far side's over the viewer's (a thin sheet's IOR on both sides).
     eta: f32,
-    /// What one crossing transmits: √base.
+    /// What one crossing transmits: √base for a solid (two crossings tint by base), base
+    /// for a thin sheet.
     tint: Rgb,
+    /// A sheet: light passes without bending, its lobe the reflection mirrored.
+    thin: bool,
+}
+
+/// `w` mirrored through the surface (z negated): a thin sheet's transmission of the
+/// reflection towards `w`.
+#[inline]
+fn mirrored(w: Vec3A) -> Vec3A {
+    Vec3A::new(w.x, w.y, -w.z)
 }
 
 impl Glass {
@@ -179,7 +193,16 @@ impl Principled {
     /// IOR `eta` (ior when the ray enters the object, 1/ior when it leaves).
     pub fn with_transmission(self, transmission: f32, eta: f32) -> Self {
         let tint = Rgb::new(self.base.x.sqrt(), self.base.y.sqrt(), self.base.z.sqrt());
-        let glass = (transmission > 0.0 && eta != 1.0).then_some(Glass { weight: transmission, eta, tint });
+        let glass =
+            (transmission > 0.0 && eta != 1.0).then_some(Glass { weight: transmission, eta, tint, thin: false });
+        Self { glass, ..self }
+    }
+
+    /// The same with `transmission` (in [0, 1]) of its dielectric as a thin-walled sheet of
+    /// `ior`, which light crosses without bending.
+    pub fn with_thin_transmission(self, transmission: f32, ior: f32) -> Self {
+        let glass =
+            (transmission > 0.0).then_some(Glass { weight: transmission, eta: ior, tint: self.base, thin: true });
         Self { glass, ..self }
     }
 
@@ -204,8 +227,18 @@ impl Principled {
         let dielectric = (1.0 - self.metallic) * (1.0 - transmission);
         let (glass, glass_albedo) = match &self.glass {
             Some(g) => {
-                let e = tables::glass_albedo(self.roughness, mu, g.eta);
-                let (gain, kept) = compensation(e, tables::glass_albedo_average(self.roughness, g.eta), g.tint);
+                // A sheet's two lobes make one reflection-shaped lobe of Fresnel F + (1 − F)·tint.
+                let (e, e_avg, average) = if g.thin {
+                    let f = fresnel::dielectric_average(g.eta);
+                    (e, e_avg, Rgb::splat(f) + g.tint * (1.0 - f))
+                } else {
+                    (
+                        tables::glass_albedo(self.roughness, mu, g.eta),
+                        tables::glass_albedo_average(self.roughness, g.eta),
+                        g.tint,
+                    )
+                };
+                let (gain, kept) = compensation(e, e_avg, average);
                 let weight = (1.0 - self.metallic) * g.weight;
                 (gain * weight, weight * mean(kept))
             }
@@ -252,6 +285,13 @@ impl Principled {
     fn eval_view(&self, v: &View, wo: Vec3A, wi: Vec3A) -> Rgb {
         if wi.z < 0.0 {
             return self.glass.map_or(Rgb::ZERO, |g| {
+                if g.thin {
+                    let m = mirrored(wi);
+                    let h = (wo + m).normalize();
+                    let f = fresnel::dielectric(wo.dot(h), g.eta);
+                    let lobe = self.ggx.d(h) * self.ggx.g2(wo, m) / (4.0 * wo.z * m.z);
+                    return g.tint * v.glass * ((1.0 - f) * lobe);
+                }
                 let Some((h, _, cos_o, cos_i)) = g.refraction(wo, wi) else { return Rgb::ZERO };
                 let f = fresnel::dielectric(cos_o, g.eta);
                 let denominator = cos_o + g.eta * cos_i;
@@ -273,6 +313,11 @@ impl Principled {
     fn pdf_view(&self, v: &View, wo: Vec3A, wi: Vec3A) -> f32 {
         if wi.z < 0.0 {
             return self.glass.map_or(0.0, |g| {
+                if g.thin {
+                    let h = (wo + mirrored(wi)).normalize();
+                    let f = fresnel::dielectric(wo.dot(h), g.eta);
+                    return v.p_glass * (1.0 - g.reflect_probability(f)) * self.ggx.reflection_pdf(wo, h);
+                }
                 let Some((h, jacobian, cos_o, _)) = g.refraction(wo, wi) else { return 0.0 };
                 let visible = self.ggx.g1(wo) * cos_o * self.ggx.d(h) / wo.z;
                 v.p_glass * (1.0 - g.reflect_probability(fresnel::dielectric(cos_o, g.eta))) * visible * jacobian
@@ -332,8 +377,11 @@ impl Principled {
                 let g = self.glass?;
                 let h = self.ggx.sample_visible_normal(wo, u);
                 let f = fresnel::dielectric(wo.dot(h), g.eta);
+                let reflected = 2.0 * wo.dot(h) * h - wo;
                 if (u_lobe - glass_from) / v.p_glass < g.reflect_probability(f) {
-                    Some(2.0 * wo.dot(h) * h - wo).filter(|wi| wi.z > 0.0)?
+                    Some(reflected).filter(|wi| wi.z > 0.0)?
+                } else if g.thin {
+                    Some(mirrored(reflected)).filter(|wi| wi.z < 0.0)?
                 } else {
                     super::microfacet::refract(wo, h, g.eta).filter(|wi| wi.z < 0.0)?
                 }

@@ -27,6 +27,12 @@ fn half_glass() -> Bsdf {
     Bsdf::Principled(p.with_transmission(0.5, 1.5))
 }
 
+/// A thin-walled sheet of tinted glass.
+fn thin_glass() -> Bsdf {
+    let Bsdf::Principled(p) = principled(Rgb::new(0.5, 0.9, 1.0), 0.0, 0.3, 1.5, 1.0, Rgb::ONE) else { unreachable!() };
+    Bsdf::Principled(p.with_thin_transmission(1.0, 1.5))
+}
+
 /// `b` under a full coat of roughness `roughness`.
 fn coated(b: Bsdf, roughness: f32) -> Bsdf {
     let Bsdf::Principled(p) = b else { unreachable!("only Principled takes a coat") };
@@ -51,6 +57,7 @@ fn bsdfs() -> Vec<(&'static str, Bsdf)> {
         ("glass r0.5 leaving", glass(Rgb::ONE, 0.5, 1.0 / 1.5)),
         ("tinted glass r0.4 ior 1.45", glass(Rgb::new(0.6, 0.9, 0.7), 0.4, 1.45)),
         ("half glass, half plastic r0.4", half_glass()),
+        ("thin tinted glass r0.3", thin_glass()),
     ]
 }
 

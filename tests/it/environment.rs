@@ -65,7 +65,10 @@ fn a_white_glass_sphere_in_a_white_furnace_neither_gains_nor_loses() {
     );
     // A sphere of glass as a glTF (RON has no glass material), from the RON sphere's triangles.
     let sphere = myriad::scene::shapes::sphere_mesh("sphere", Vec3A::ZERO, 1.0, 5, 0);
-    write_gltf_mesh(&dir.path().join("sphere.gltf"), &sphere.positions, &sphere.triangles);
+    let glass = serde_json::json!({"pbrMetallicRoughness": {"metallicFactor": 0, "roughnessFactor": 0.4},
+        "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1},
+                       "KHR_materials_volume": {"thicknessFactor": 1}}});
+    write_gltf_mesh(&dir.path().join("sphere.gltf"), &sphere.positions, &sphere.triangles, glass, "test");
     let scene = load(&path, Some(UVec2::new(16, 16)), None).unwrap();
     let film = render_with(&scene, LightSamplerKind::Tree, 256, 16, 1);
     for i in [8 * 16 + 8, 6 * 16 + 7, 0] {
@@ -79,8 +82,14 @@ fn a_white_glass_sphere_in_a_white_furnace_neither_gains_nor_loses() {
     }
 }
 
-/// Writes a glTF holding one mesh of rough white glass.
-fn write_gltf_mesh(path: &Path, positions: &[Vec3A], triangles: &[[u32; 3]]) {
+/// Writes a glTF holding one mesh of `material`, as written by `generator`.
+fn write_gltf_mesh(
+    path: &Path,
+    positions: &[Vec3A],
+    triangles: &[[u32; 3]],
+    material: serde_json::Value,
+    generator: &str,
+) {
     let mut bytes: Vec<u8> = positions.iter().flat_map(|p| [p.x, p.y, p.z]).flat_map(f32::to_le_bytes).collect();
     let index_offset = bytes.len();
     bytes.extend(triangles.iter().flatten().flat_map(|i| i.to_le_bytes()));
@@ -89,12 +98,11 @@ fn write_gltf_mesh(path: &Path, positions: &[Vec3A], triangles: &[[u32; 3]]) {
     std::fs::write(path.with_extension("bin"), &bytes).unwrap();
     let uri = path.with_extension("bin").file_name().unwrap().to_string_lossy().into_owned();
     let doc = serde_json::json!({
-        "asset": {"version": "2.0"},
+        "asset": {"version": "2.0", "generator": generator},
         "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
         "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
-        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 0.4},
-                       "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1}}}],
-        "extensionsUsed": ["KHR_materials_transmission"],
+        "materials": [material],
+        "extensionsUsed": ["KHR_materials_transmission", "KHR_materials_volume"],
         "buffers": [{"byteLength": bytes.len(), "uri": uri}],
         "bufferViews": [{"buffer": 0, "byteLength": index_offset}, {"buffer": 0, "byteOffset": index_offset, "byteLength": bytes.len() - index_offset}],
         "accessors": [
@@ -103,6 +111,73 @@ fn write_gltf_mesh(path: &Path, positions: &[Vec3A], triangles: &[[u32; 3]]) {
         ]
     });
     std::fs::write(path, doc.to_string()).unwrap();
+}
+
+/// The centre pixel of `object` (a glTF of one mesh) seen from 4 m along +Z under a white sky.
+fn centre_under_white_sky(object: (&[Vec3A], &[[u32; 3]]), material: serde_json::Value, generator: &str) -> (Rgb, Rgb) {
+    let dir = tempfile::tempdir().unwrap();
+    write_gltf_mesh(&dir.path().join("object.gltf"), object.0, object.1, material, generator);
+    let path = scene_file(
+        dir.path(),
+        r#"camera: Perspective(eye: (0, 0, 4), look_at: (0, 0, 0), yfov_deg: 2),
+           objects: [ Mesh(path: "object.gltf") ], environment: Constant(radiance: (1, 1, 1))"#,
+    );
+    let scene = load(&path, Some(UVec2::new(1, 1)), None).unwrap();
+    let film = render_with(&scene, LightSamplerKind::Tree, 4096, 24, 7);
+    (film.mean(0), film.variance_of_mean(0))
+}
+
+/// A unit cube centred at the origin, faces counter-clockwise seen from outside.
+fn unit_cube() -> (Vec<Vec3A>, Vec<[u32; 3]>) {
+    let mesh = myriad::scene::shapes::box_mesh("cube", Vec3A::ONE, 0);
+    (mesh.positions, mesh.triangles)
+}
+
+#[test]
+fn absorbing_glass_keeps_what_beer_lambert_says() {
+    // Looking straight through a smooth unit cube of IOR 1.5 at a white sky: Fresnel R = 0.04
+    // at each face, a = the transmittance of 1 m, and every internal bounce leaves for the
+    // sky: R + (1 − R)²·a / (1 − R·a). The specification's volume makes a = colour^(d/dist);
+    // for a file Blender wrote, Cycles' absorption node makes a = exp(−(1 − colour)·d/dist).
+    let (positions, triangles) = unit_cube();
+    let volume = serde_json::json!({"pbrMetallicRoughness": {"metallicFactor": 0, "roughnessFactor": 0},
+        "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1},
+                       "KHR_materials_volume": {"thicknessFactor": 1, "attenuationDistance": 1,
+                                                "attenuationColor": [0.5, 0.25, 1.0]}}});
+    let r = 0.04f32;
+    let expect = |a: f32| r + (1.0 - r) * (1.0 - r) * a / (1.0 - r * a);
+    for (generator, a) in [
+        ("test", Rgb::new(0.5, 0.25, 1.0)),
+        ("Khronos glTF Blender I/O v5.0.21", Rgb::new((-0.5f32).exp(), (-0.75f32).exp(), 1.0)),
+    ] {
+        let (m, v) = centre_under_white_sky((&positions, &triangles), volume.clone(), generator);
+        for c in 0..3 {
+            let e = expect(a[c]);
+            assert!(
+                (m[c] - e).abs() < 5.0 * v[c].sqrt() + 2e-3,
+                "{generator}: channel {c}: {} ± {} vs {e}",
+                m[c],
+                v[c].sqrt()
+            );
+        }
+    }
+}
+
+#[test]
+fn transmission_without_a_volume_is_a_thin_sheet_unless_blender_wrote_it() {
+    // One quad of glass tinted (0.5, 1, 1) facing the camera under a white sky. A thin sheet
+    // (the specification's default) transmits the base colour once: R + (1 − R)·base; a solid
+    // surface (Blender's import: Cycles' solid glass) transmits √base at its one crossing.
+    let quad =
+        myriad::scene::shapes::quad_mesh("sheet", Vec3A::new(-1.0, -1.0, 0.0), Vec3A::X * 2.0, Vec3A::Y * 2.0, 0);
+    let sheet = serde_json::json!({"pbrMetallicRoughness": {"baseColorFactor": [0.5, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 0},
+        "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1}}});
+    let r = 0.04f32;
+    for (generator, tint) in [("test", 0.5f32), ("Khronos glTF Blender I/O v5.0.21", 0.5f32.sqrt())] {
+        let (m, v) = centre_under_white_sky((&quad.positions, &quad.triangles), sheet.clone(), generator);
+        let e = r + (1.0 - r) * tint;
+        assert!((m.x - e).abs() < 5.0 * v.x.sqrt() + 2e-3, "{generator}: {} ± {} vs {e}", m.x, v.x.sqrt());
+    }
 }
 
 /// A small map with a bright spot, a dim sky gradient and a black lower half.

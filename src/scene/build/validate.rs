@@ -60,6 +60,7 @@ fn validate_material(file: &str, m: &Material, images: usize) -> Result<()> {
     check_unit(file, &what, "specular", m.specular)?;
     check_unit(file, &what, "coat", m.coat)?;
     check_unit(file, &what, "transmission", m.transmission)?;
+    check_color(file, &what, "absorption", m.absorption, None)?;
     check_unit(file, &what, "coat roughness", m.coat_roughness)?;
     check_color(file, &what, "specular colour", m.specular_color, None)?;
     if !(m.ior > 1.0 && m.ior.is_finite()) {
