@@ -128,6 +128,8 @@ fn inputs() -> Vec<Input> {
         Input { name: "scene.gltf", bytes: data("tests/data/cornell/cornell-striped.gltf"), beside: vec![] },
         Input { name: "scene.glb", bytes: data("tests/data/blender/panels.glb"), beside: vec![] },
         Input { name: "scene.glb", bytes: data("tests/data/blender/punctual.glb"), beside: vec![] },
+        Input { name: "scene.glb", bytes: data("tests/data/blender/materials.glb"), beside: vec![] },
+        Input { name: "scene.glb", bytes: data("tests/data/blender/glass.glb"), beside: vec![] },
         Input {
             name: "scene.ron",
             bytes: EVERYTHING_RON.as_bytes().to_vec(),
