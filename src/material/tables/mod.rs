@@ -35,23 +35,28 @@ fn outgoing(mu: f32) -> Vec3A {
     Vec3A::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu)
 }
 
-/// The mean of `f(wo, h, wi)` over reflections of `wo` about `n × n` stratified visible
-/// normals of roughness `rough` (0 for those below the horizon).
-fn visible_normal_mean(rough: f32, mu: f32, n: usize, f: impl Fn(&Ggx, Vec3A, Vec3A, Vec3A) -> f64) -> f64 {
+/// The mean of `f(ggx, wo, h)` over `n × n` stratified visible normals `h` of roughness
+/// `rough` seen from cos θo = `mu`.
+fn over_visible_normals(rough: f32, mu: f32, n: usize, f: impl Fn(&Ggx, Vec3A, Vec3A) -> f64) -> f64 {
     let ggx = Ggx::from_roughness(rough);
     let wo = outgoing(mu);
     let mut sum = 0.0;
     for a in 0..n {
         for b in 0..n {
             let u = Vec2::new((a as f32 + 0.5) / n as f32, (b as f32 + 0.5) / n as f32);
-            let h = ggx.sample_visible_normal(wo, u);
-            let wi = 2.0 * wo.dot(h) * h - wo;
-            if wi.z > 0.0 {
-                sum += f(&ggx, wo, h, wi);
-            }
+            sum += f(&ggx, wo, ggx.sample_visible_normal(wo, u));
         }
     }
     sum / (n * n) as f64
+}
+
+/// The mean of `f(wo, h, wi)` over reflections of `wo` about stratified visible normals
+/// ([`over_visible_normals`]), 0 for those below the horizon.
+fn visible_normal_mean(rough: f32, mu: f32, n: usize, f: impl Fn(&Ggx, Vec3A, Vec3A, Vec3A) -> f64) -> f64 {
+    over_visible_normals(rough, mu, n, |ggx, wo, h| {
+        let wi = 2.0 * wo.dot(h) * h - wo;
+        if wi.z > 0.0 { f(ggx, wo, h, wi) } else { 0.0 }
+    })
 }
 
 /// Directional albedo of a white GGX reflection lobe, ∫ D·G2/(4μo) dωi = E_vndf[G2/G1].
@@ -74,27 +79,21 @@ pub fn ggx_albedo_average(rough: f32, steps: usize, n: usize) -> f64 {
 /// F and refracts with 1 − F (total internal reflection reflects all), and each direction
 /// that stays on its side counts G2/G1, without the η² of radiance compression (Cycles').
 pub fn ggx_glass_albedo(rough: f32, mu: f32, eta: f32, n: usize) -> f64 {
-    let ggx = Ggx::from_roughness(rough);
-    let wo = outgoing(mu);
-    let mut sum = 0.0;
-    for a in 0..n {
-        for b in 0..n {
-            let u = Vec2::new((a as f32 + 0.5) / n as f32, (b as f32 + 0.5) / n as f32);
-            let h = ggx.sample_visible_normal(wo, u);
-            let cos = wo.dot(h);
-            let f = fresnel::dielectric(cos, eta);
-            let reflected = 2.0 * cos * h - wo;
-            if reflected.z > 0.0 {
-                sum += f as f64 * (ggx.g2(wo, reflected) / ggx.g1(wo)) as f64;
-            }
-            if let Some(refracted) = super::microfacet::refract(wo, h, eta)
-                && refracted.z < 0.0
-            {
-                sum += (1.0 - f) as f64 * (ggx.g2(wo, -refracted) / ggx.g1(wo)) as f64;
-            }
+    over_visible_normals(rough, mu, n, |ggx, wo, h| {
+        let cos = wo.dot(h);
+        let f = fresnel::dielectric(cos, eta);
+        let reflected = 2.0 * cos * h - wo;
+        let mut sum = 0.0;
+        if reflected.z > 0.0 {
+            sum += f as f64 * (ggx.g2(wo, reflected) / ggx.g1(wo)) as f64;
         }
-    }
-    sum / (n * n) as f64
+        if let Some(refracted) = super::microfacet::refract(wo, h, eta)
+            && refracted.z < 0.0
+        {
+            sum += (1.0 - f) as f64 * (ggx.g2(wo, -refracted) / ggx.g1(wo)) as f64;
+        }
+        sum
+    })
 }
 
 /// ∫₀¹ 2μ·E_glass(r, μ, η) dμ by the midpoint rule over `steps` cosines.
