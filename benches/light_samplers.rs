@@ -4,9 +4,10 @@
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use myriad::light::{AreaEmission, Light, LightId, TriangleLight};
-use myriad::light_sampler::{LightSampler, LightSamplerKind, LightStrategy, LightTree, ShadingContext};
+use myriad::light_sampler::{LightSampler, LightStrategy, LightTree, ShadingContext};
 use myriad::math::{Rgb, Vec3A};
 use myriad::sampling::{Dim, SampleStream};
+use myriad::settings::LightSamplerKind;
 use std::hint::black_box;
 
 /// `n` small emissive triangles scattered over a 20 m × 20 m ceiling at heights 2–4 m, facing

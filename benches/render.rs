@@ -4,10 +4,11 @@
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use myriad::commands::load_scene;
-use myriad::light_sampler::{LightSamplerKind, LightStrategy};
+use myriad::light_sampler::LightStrategy;
 use myriad::math::UVec2;
 use myriad::render::{Budget, RenderSettings, render};
 use myriad::scene::BuildOptions;
+use myriad::settings::LightSamplerKind;
 use std::path::Path;
 
 fn scene(name: &str, res: UVec2) -> myriad::scene::Scene {
@@ -20,14 +21,14 @@ fn bench(c: &mut Criterion) {
     group.sample_size(10);
     for name in ["cornell-5x5.ron", "cornell-9x9.ron", "cornell-32x32.ron"] {
         let s = scene(name, UVec2::new(80, 60));
-        for kind in LightSamplerKind::ALL {
+        for kind in LightSamplerKind::EVERY {
             if kind == LightSamplerKind::All && s.lights.len() > 100 {
                 continue;
             }
             let strategy = LightStrategy::build(kind, &s.lights, s.radius);
             let settings = RenderSettings { budget: Budget::Spp(4), seed: 0, max_depth: 8, aovs: Default::default() };
             group.bench_with_input(BenchmarkId::new(kind.name(), name), &name, |b, _| {
-                b.iter(|| render(&s, &strategy, &settings, None, &mut |_, _| {}).stats.samples)
+                b.iter(|| render(&s, &strategy, &settings, &mut ()).stats.samples)
             });
         }
     }

@@ -1,23 +1,14 @@
 //! The film: per-pixel sums of samples, turned into mean, variance and AOV images.
 //!
 //! Owns: accumulation (f64 sums of value and value², so that partial renders merge exactly and
-//! variance needs no second pass), the optional first-hit AOVs, and [`Channel`] images for
+//! variance needs no second pass), the optional first-hit AOVs, and the [`Layers`] written for
 //! output. A pixel is only ever written by the worker that owns its row band, so there are no
 //! locks; samples are added in sample-index order, so the sums (and the image) do not depend
 //! on the thread count.
 
+use crate::image::Layers;
+use crate::integrator::FirstHit;
 use crate::math::{Rgb, UVec2, Vec3A};
-
-/// First-hit data of one camera sample, for the AOVs.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct FirstHit {
-    /// Base colour of the material hit.
-    pub albedo: Rgb,
-    /// Shading normal, facing the camera.
-    pub normal: Vec3A,
-    /// Distance along the camera ray.
-    pub depth: f32,
-}
 
 /// Which extra images to keep.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -75,37 +66,6 @@ impl AovSum {
             self.normal += h.normal;
             self.depth += h.depth;
         }
-    }
-}
-
-/// A named single-channel image (row-major, top row first).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Channel {
-    /// EXR channel name (`R`, `albedo.G`, `variance.B`, `Z`…).
-    pub name: String,
-    /// Values.
-    pub data: Vec<f32>,
-}
-
-/// An image made of named channels, all of one size.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Layers {
-    /// Width and height.
-    pub size: UVec2,
-    /// Channels.
-    pub channels: Vec<Channel>,
-}
-
-impl Layers {
-    /// The channel called `name`.
-    pub fn channel(&self, name: &str) -> Option<&Channel> {
-        self.channels.iter().find(|c| c.name == name)
-    }
-
-    /// The R, G, B channels as colours, if present.
-    pub fn rgb(&self) -> Option<Vec<Rgb>> {
-        let (r, g, b) = (self.channel("R")?, self.channel("G")?, self.channel("B")?);
-        Some((0..r.data.len()).map(|i| Rgb::new(r.data[i], g.data[i], b.data[i])).collect())
     }
 }
 
@@ -207,39 +167,26 @@ impl Film {
     /// The output channels: R, G, B, then the AOVs asked for.
     pub fn layers(&self, aovs: AovSet) -> Layers {
         let n = self.pixels.len();
-        let mut channels = Vec::new();
-        let means = self.means();
-        let mut push3 = |prefix: &str, f: &dyn Fn(usize) -> Vec3A| {
-            let vals: Vec<Vec3A> = (0..n).map(f).collect();
-            for (c, suffix) in ["R", "G", "B"].iter().enumerate() {
-                let name = if prefix.is_empty() { suffix.to_string() } else { format!("{prefix}.{suffix}") };
-                channels.push(Channel { name, data: vals.iter().map(|v| v[c]).collect() });
-            }
-        };
-        push3("", &|i| means[i]);
+        let mut layers = Layers::new(self.size);
+        layers.push_rgb("", &self.means());
         let inv = 1.0 / self.spp.max(1) as f32;
         if let Some(a) = &self.aovs {
             if aovs.albedo {
-                push3("albedo", &|i| a[i].albedo * inv);
+                layers.push_rgb("albedo", &a.iter().map(|p| p.albedo * inv).collect::<Vec<_>>());
             }
             if aovs.normal {
-                // Named X/Y/Z below; averaged normals are renormalised.
-                let vals: Vec<Vec3A> = (0..n).map(|i| a[i].normal.normalize_or_zero()).collect();
-                for (c, s) in ["N.X", "N.Y", "N.Z"].iter().enumerate() {
-                    channels.push(Channel { name: s.to_string(), data: vals.iter().map(|v| v[c]).collect() });
-                }
+                // averaged normals are renormalised
+                let normals: Vec<Vec3A> = a.iter().map(|p| p.normal.normalize_or_zero()).collect();
+                layers.push_vectors(["N.X", "N.Y", "N.Z"], &normals);
             }
             if aovs.depth {
-                channels.push(Channel { name: "Z".into(), data: (0..n).map(|i| a[i].depth * inv).collect() });
+                layers.push("Z", a.iter().map(|p| p.depth * inv).collect());
             }
         }
         if aovs.variance {
-            let vals: Vec<Vec3A> = (0..n).map(|i| self.variance_of_mean(i)).collect();
-            for (c, s) in ["variance.R", "variance.G", "variance.B"].iter().enumerate() {
-                channels.push(Channel { name: s.to_string(), data: vals.iter().map(|v| v[c]).collect() });
-            }
+            layers.push_rgb("variance", &(0..n).map(|i| self.variance_of_mean(i)).collect::<Vec<_>>());
         }
-        Layers { size: self.size, channels }
+        layers
     }
 }
 

@@ -11,7 +11,7 @@
 //! the `myriad` binary does.
 //!
 //! ```
-//! use myriad::{commands, light_sampler::{LightSamplerKind, LightStrategy}, render, scene::BuildOptions};
+//! use myriad::{commands, light_sampler::LightStrategy, settings::LightSamplerKind, render, scene::BuildOptions};
 //! use myriad::math::UVec2;
 //!
 //! // The built-in Cornell box, tiny and quick.
@@ -21,7 +21,7 @@
 //! let settings = render::RenderSettings {
 //!     budget: render::Budget::Spp(4), seed: 1, max_depth: 4, aovs: Default::default(),
 //! };
-//! let out = render::render(&scene, &strategy, &settings, None, &mut |_, _| {});
+//! let out = render::render(&scene, &strategy, &settings, &mut ());
 //! assert_eq!(out.stats.spp, 4);
 //! assert!(out.film.means().iter().any(|p| p.max_element() > 0.0));
 //! ```
@@ -34,6 +34,7 @@ pub mod film;
 pub mod fingerprint;
 pub mod geometry;
 pub mod guard;
+pub mod image;
 pub mod integrator;
 pub mod interrupt;
 pub mod io;
@@ -45,5 +46,6 @@ pub mod math;
 pub mod render;
 pub mod sampling;
 pub mod scene;
+pub mod settings;
 
 pub use error::{Error, Result};

@@ -4,16 +4,17 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
+use clap::builder::TypedValueParser;
 use clap::{Args, Parser, Subcommand};
-use myriad::commands::compare::{CompareOptions, compare};
+use myriad::commands::compare::CompareOptions;
 use myriad::commands::diff::diff;
+use myriad::commands::settings::RenderRequest;
 use myriad::commands::{self, SceneOptions, info::info, render::RenderOptions};
 use myriad::film::AovSet;
 use myriad::io::LoadOptions;
-use myriad::light_sampler::LightSamplerKind;
 use myriad::math::UVec2;
-use myriad::render::Budget;
 use myriad::scene::{BuildOptions, MAX_RESOLUTION};
+use myriad::settings::LightSamplerKind;
 
 /// myriad: a path tracer for scenes lit by very many lights.
 ///
@@ -79,22 +80,68 @@ struct RenderArgs {
     /// Output EXR.
     #[arg(short, long, default_value = "myriad.exr")]
     output: PathBuf,
-    /// Samples per pixel.
+    /// How next-event estimation picks lights.
+    #[arg(long, value_parser = sampler_parser())]
+    sampler: Option<LightSamplerKind>,
+    /// PNG preview path (default: the EXR path with .png).
+    #[arg(long)]
+    png: Option<PathBuf>,
+    /// Do not write a PNG preview.
+    #[arg(long, conflicts_with = "png")]
+    no_png: bool,
+    /// Extra EXR channels, comma-separated: albedo, normal, depth, variance.
+    #[arg(long, value_delimiter = ',', value_parser = ["albedo", "normal", "depth", "variance"])]
+    aov: Vec<String>,
+    #[command(flatten)]
+    common: CommonArgs,
+}
+
+#[derive(Args)]
+struct CompareArgs {
+    /// Scene file (.ron, .obj, .gltf or .glb).
+    scene: PathBuf,
+    /// Samplers to compare, comma-separated [default: uniform,power,local,tree and the
+    /// scene file's own sampler].
+    #[arg(long, value_parser = sampler_parser(), value_delimiter = ',')]
+    samplers: Option<Vec<LightSamplerKind>>,
+    /// Reference EXR to measure against (default: render one and cache it in the output folder).
+    #[arg(long, conflicts_with_all = ["reference_spp", "reference_sampler"])]
+    reference: Option<PathBuf>,
+    /// spp of the rendered reference.
+    #[arg(long, default_value_t = 1024)]
+    reference_spp: u32,
+    /// Sampler of the rendered reference (default: all up to 64 lights, local up to 10^4, tree beyond).
+    #[arg(long, value_parser = sampler_parser())]
+    reference_sampler: Option<LightSamplerKind>,
+    /// Seeds per sampler: metrics become mean ± standard deviation, and the bias check gains power.
+    #[arg(long, default_value_t = 1)]
+    seeds: u32,
+    /// Output folder (default: compare-<scene name>).
+    #[arg(long)]
+    out_dir: Option<PathBuf>,
+    #[command(flatten)]
+    common: CommonArgs,
+}
+
+/// The flags `render` and `compare` share. Settings not given come from the scene file's
+/// `render` block, then the defaults.
+#[derive(Args)]
+struct CommonArgs {
+    /// Samples per pixel [default: 64; compare: 16 for every sampler].
     #[arg(long, conflicts_with = "time")]
     spp: Option<u32>,
-    /// Render for this many seconds (whole passes) instead of a fixed spp.
+    /// Render for this many seconds (whole passes) instead of a fixed spp (compare: every
+    /// sampler, per seed).
     #[arg(long, value_parser = parse_seconds)]
     time: Option<Duration>,
-    /// How next-event estimation picks lights.
-    #[arg(long, value_enum)]
-    sampler: Option<LightSamplerKind>,
-    /// Random seed: the same seed gives the same image, whatever --threads is.
+    /// Random seed: the same seed gives the same image, whatever --threads is (compare: the
+    /// runs use the K seeds after it).
     #[arg(long)]
     seed: Option<u64>,
     /// Output size, e.g. 640x480 (the camera's vertical field of view is kept).
     #[arg(long, value_parser = parse_resolution)]
     resolution: Option<UVec2>,
-    /// Maximum number of bounces (scattering events); 1 is direct lighting only.
+    /// Maximum number of bounces (scattering events); 1 is direct lighting only [default: 8].
     #[arg(long, conflicts_with = "direct_only")]
     max_depth: Option<u32>,
     /// Direct lighting only (same as --max-depth 1): isolates the light sampler's noise.
@@ -104,67 +151,7 @@ struct RenderArgs {
     /// from the front (for OBJ files, which carry no camera).
     #[arg(long)]
     camera: Option<String>,
-    /// PNG preview path (default: the EXR path with .png).
-    #[arg(long)]
-    png: Option<PathBuf>,
-    /// Do not write a PNG preview.
-    #[arg(long, conflicts_with = "png")]
-    no_png: bool,
-    /// PNG preview exposure, in stops.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_exposure)]
-    exposure: f32,
-    /// Extra EXR channels, comma-separated: albedo, normal, depth, variance.
-    #[arg(long, value_delimiter = ',', value_parser = ["albedo", "normal", "depth", "variance"])]
-    aov: Vec<String>,
-    /// Hide the progress bar.
-    #[arg(long, short)]
-    quiet: bool,
-    #[command(flatten)]
-    load: LoadArgs,
-}
-
-#[derive(Args)]
-struct CompareArgs {
-    /// Scene file (.ron, .obj, .gltf or .glb).
-    scene: PathBuf,
-    /// Samplers to compare, comma-separated.
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "uniform,power,local,tree")]
-    samplers: Vec<LightSamplerKind>,
-    /// Equal spp: every sampler renders this many samples per pixel (default 16).
-    #[arg(long, conflicts_with = "time")]
-    spp: Option<u32>,
-    /// Equal time: every sampler renders this many seconds (per seed).
-    #[arg(long, value_parser = parse_seconds)]
-    time: Option<Duration>,
-    /// Reference EXR to measure against (default: render one and cache it in the output folder).
-    #[arg(long, conflicts_with_all = ["reference_spp", "reference_sampler"])]
-    reference: Option<PathBuf>,
-    /// spp of the rendered reference.
-    #[arg(long, default_value_t = 1024)]
-    reference_spp: u32,
-    /// Sampler of the rendered reference (default: all up to 64 lights, local up to 10^4, tree beyond).
-    #[arg(long, value_enum)]
-    reference_sampler: Option<LightSamplerKind>,
-    /// Seeds per sampler: metrics become mean ± standard deviation, and the bias check gains power.
-    #[arg(long, default_value_t = 1)]
-    seeds: u32,
-    /// Output folder (default: compare-<scene name>).
-    #[arg(long)]
-    out_dir: Option<PathBuf>,
-    /// Image size, e.g. 320x240.
-    #[arg(long, value_parser = parse_resolution)]
-    resolution: Option<UVec2>,
-    /// Maximum number of bounces.
-    #[arg(long, conflicts_with = "direct_only")]
-    max_depth: Option<u32>,
-    /// Direct lighting only (same as --max-depth 1).
-    #[arg(long)]
-    direct_only: bool,
-    /// Camera to use, by name (default: the scene's first); `auto` frames the whole scene
-    /// from the front (for OBJ files, which carry no camera).
-    #[arg(long)]
-    camera: Option<String>,
-    /// Exposure of the previews, in stops.
+    /// Exposure of the PNG previews, in stops.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_exposure)]
     exposure: f32,
     /// Hide the progress bars.
@@ -172,6 +159,20 @@ struct CompareArgs {
     quiet: bool,
     #[command(flatten)]
     load: LoadArgs,
+}
+
+impl CommonArgs {
+    /// The render settings asked for (`sampler`: the one `render` names).
+    fn request(&self, sampler: Option<LightSamplerKind>) -> RenderRequest {
+        RenderRequest {
+            spp: self.spp,
+            time: self.time,
+            sampler,
+            seed: self.seed,
+            max_depth: self.max_depth,
+            direct_only: self.direct_only,
+        }
+    }
 }
 
 /// Options for reading scene files.
@@ -192,6 +193,12 @@ impl LoadArgs {
         let d = LoadOptions::default();
         LoadOptions { gltf_scene: self.gltf_scene, punctual_scale: self.punctual_scale.unwrap_or(d.punctual_scale) }
     }
+}
+
+/// Light samplers by name, with the names listed in `--help` and in errors.
+fn sampler_parser() -> impl TypedValueParser<Value = LightSamplerKind> {
+    clap::builder::PossibleValuesParser::new(LightSamplerKind::EVERY.map(LightSamplerKind::name))
+        .try_map(|s| s.parse::<LightSamplerKind>())
 }
 
 fn parse_seconds(s: &str) -> Result<Duration, String> {
@@ -233,85 +240,70 @@ fn run(cli: Cli) -> myriad::Result<ExitCode> {
             .map_err(|e| myriad::Error::Usage(format!("cannot start {n} threads: {e}")))?;
     }
     match cli.command {
-        Command::Render(a) => {
-            let opts = RenderOptions {
-                scene: a.scene,
-                output: a.output,
-                png: a.png,
-                no_png: a.no_png,
-                spp: a.spp,
-                time: a.time,
-                sampler: a.sampler,
-                seed: a.seed,
-                resolution: a.resolution,
-                max_depth: a.max_depth,
-                direct_only: a.direct_only,
-                camera: a.camera,
-                aovs: AovSet {
-                    albedo: a.aov.iter().any(|s| s == "albedo"),
-                    normal: a.aov.iter().any(|s| s == "normal"),
-                    depth: a.aov.iter().any(|s| s == "depth"),
-                    variance: a.aov.iter().any(|s| s == "variance"),
-                },
-                exposure: a.exposure,
-                progress: !a.quiet,
-                load: a.load.options(),
-            };
-            let report = commands::render::render(&opts)?;
-            let stopped = report.output.stats.stopped != myriad::interrupt::Stop::No;
-            say(report);
-            if stopped {
-                return Ok(ExitCode::from(myriad::interrupt::EXIT_STATUS));
-            }
-        }
-        Command::Compare(a) => {
-            let out_dir = a.out_dir.unwrap_or_else(|| {
-                PathBuf::from(format!(
-                    "compare-{}",
-                    a.scene.file_stem().map_or("scene".into(), |s| s.to_string_lossy())
-                ))
-            });
-            let opts = CompareOptions {
-                scene: a.scene,
-                samplers: a.samplers,
-                budget: match a.time {
-                    Some(t) => Budget::Time(t),
-                    None => Budget::Spp(a.spp.unwrap_or(16).max(1)),
-                },
-                reference: a.reference,
-                reference_spp: a.reference_spp.max(1),
-                reference_sampler: a.reference_sampler,
-                seeds: a.seeds.max(1),
-                out_dir: out_dir.clone(),
-                resolution: a.resolution,
-                max_depth: if a.direct_only { Some(1) } else { a.max_depth },
-                camera: a.camera,
-                exposure: a.exposure,
-                progress: !a.quiet,
-                load: a.load.options(),
-            };
-            let report = compare(&opts)?;
-            say(report.table());
-            for s in report.samplers.iter().filter(|s| s.bias.flagged) {
-                say(format!(
-                    "warning: {} disagrees with the reference (z = {:.1}): biased sampler or unconverged reference",
-                    s.sampler, s.bias.z
-                ));
-            }
-            say(format!(
-                "wrote {} (report.md, report.json, contact-sheet.png, convergence.svg, per-sampler EXR and error maps)",
-                out_dir.display()
-            ));
-        }
-        Command::Diff { image, reference, out } => {
-            say(diff(&image, &reference, out.as_deref())?);
-        }
+        Command::Render(a) => return render(a),
+        Command::Compare(a) => compare(a)?,
+        Command::Diff { image, reference, out } => say(diff(&image, &reference, out.as_deref())?),
         Command::Info { scene, camera, load } => {
             let options = SceneOptions { load: load.options(), build: BuildOptions { resolution: None, camera } };
             say(info(scene.as_deref(), &options)?);
         }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+fn render(a: RenderArgs) -> myriad::Result<ExitCode> {
+    let has = |name: &str| a.aov.iter().any(|s| s == name);
+    let opts = RenderOptions {
+        scene: a.scene,
+        output: a.output,
+        png: a.png,
+        no_png: a.no_png,
+        settings: a.common.request(a.sampler),
+        resolution: a.common.resolution,
+        camera: a.common.camera,
+        aovs: AovSet { albedo: has("albedo"), normal: has("normal"), depth: has("depth"), variance: has("variance") },
+        exposure: a.common.exposure,
+        progress: !a.common.quiet,
+        load: a.common.load.options(),
+    };
+    let report = commands::render::render(&opts)?;
+    let stopped = report.output.stats.stopped != myriad::interrupt::Stop::No;
+    say(report);
+    Ok(if stopped { ExitCode::from(myriad::interrupt::EXIT_STATUS) } else { ExitCode::SUCCESS })
+}
+
+fn compare(a: CompareArgs) -> myriad::Result<()> {
+    let out_dir = a.out_dir.unwrap_or_else(|| {
+        PathBuf::from(format!("compare-{}", a.scene.file_stem().map_or("scene".into(), |s| s.to_string_lossy())))
+    });
+    let opts = CompareOptions {
+        scene: a.scene,
+        samplers: a.samplers,
+        settings: a.common.request(None),
+        reference: a.reference,
+        reference_spp: a.reference_spp.max(1),
+        reference_sampler: a.reference_sampler,
+        seeds: a.seeds.max(1),
+        out_dir: out_dir.clone(),
+        resolution: a.common.resolution,
+        camera: a.common.camera,
+        exposure: a.common.exposure,
+        progress: !a.common.quiet,
+        load: a.common.load.options(),
+    };
+    let report = myriad::commands::compare::compare(&opts)?;
+    say(report.table());
+    for s in report.samplers.iter().filter(|s| s.bias.flagged) {
+        say(format!(
+            "warning: {} disagrees with the reference (z = {:.1}): biased sampler or unconverged reference",
+            s.sampler, s.bias.z
+        ));
+    }
+    say(format!(
+        "wrote {} (report.md, report.json, contact-sheet.png, convergence.svg, per-sampler EXR and error maps)",
+        out_dir.display()
+    ));
+    Ok(())
 }
 
 /// Prints to stdout; a closed pipe (`myriad … | head`) ends the output quietly instead of

@@ -1,14 +1,15 @@
 //! Rendering an image: pixels over rayon, samples per pixel, timing and statistics.
 //!
-//! Owns: [`RenderSettings`], [`render`] and [`RenderOutput`]. The film is cut into bands of
-//! rows; rayon's work stealing balances them. Sample `s` of pixel `p` always uses
-//! `SampleStream::new(seed, p, s)`, and a pixel's samples are added in index order, so the
-//! image is bit-identical whatever the thread count, and a render of samples `a..b` merges
-//! exactly with one of `b..c`. An equal-time render runs passes until its budget is spent.
+//! Owns: [`RenderSettings`], [`render`], [`RenderOutput`] and the [`RenderObserver`] that
+//! watches a render (progress displays, convergence plots; no UI crate here). The film is
+//! cut into bands of rows; rayon's work stealing balances them. Sample `s` of pixel `p`
+//! always uses `SampleStream::new(seed, p, s)`, and a pixel's samples are added in index
+//! order, so the image is bit-identical whatever the thread count, and a render of samples
+//! `a..b` merges exactly with one of `b..c`. An equal-time render runs passes until its
+//! budget is spent.
 
 use std::time::{Duration, Instant};
 
-use indicatif::ProgressBar;
 use rayon::prelude::*;
 
 use crate::film::{AovSet, Film};
@@ -46,6 +47,29 @@ pub struct RenderSettings {
     pub max_depth: u32,
     /// Extra images to keep.
     pub aovs: AovSet,
+}
+
+/// Whoever watches a render: a progress display, a convergence plot, a viewer. Work is
+/// counted in camera samples for a fixed spp and in milliseconds for a time budget.
+pub trait RenderObserver: Sync {
+    /// The render begins and will report `total` units of work.
+    fn start(&self, _total: u64) {}
+    /// `n` more units are done; called from the worker threads as bands finish.
+    fn advance(&self, _n: u64) {}
+    /// A pass has finished: `film` holds every sample so far, `elapsed` since the start.
+    fn pass(&mut self, _film: &Film, _elapsed: Duration) {}
+}
+
+/// Nobody watches.
+impl RenderObserver for () {}
+
+/// An observer that only wants the film after each pass: `OnPass(|film, elapsed| ...)`.
+pub struct OnPass<F>(pub F);
+
+impl<F: FnMut(&Film, Duration) + Sync> RenderObserver for OnPass<F> {
+    fn pass(&mut self, film: &Film, elapsed: Duration) {
+        (self.0)(film, elapsed)
+    }
 }
 
 /// Counts and timings of a render.
@@ -108,7 +132,7 @@ fn render_pass(
     film: &mut Film,
     first: u32,
     count: u32,
-    progress: Option<&ProgressBar>,
+    progress: Option<&dyn RenderObserver>,
 ) -> (RayCounters, u64) {
     let size = scene.camera.resolution();
     let bands: Vec<_> = film.bands_mut(ROWS_PER_BAND).collect();
@@ -138,8 +162,8 @@ fn render_pass(
                     }
                 }
             }
-            if let Some(pb) = progress {
-                pb.inc(pixels.len() as u64 * count as u64);
+            if let Some(observer) = progress {
+                observer.advance(pixels.len() as u64 * count as u64);
             }
             (counters, bad)
         })
@@ -176,34 +200,31 @@ fn next_pass(budget: Budget, done: u32, per_spp: Option<Duration>, elapsed: Dura
     }
 }
 
-/// Renders `scene` with `strategy` in the current rayon pool. `progress` (if any) advances by
-/// one per camera sample (fixed spp) or per millisecond (equal time). `on_pass` sees the film
-/// after every pass ([`next_pass`] sizes them). A stop the user asks for
-/// ([`crate::interrupt`]) ends the render after the pass under way, or at once.
+/// Renders `scene` with `strategy` in the current rayon pool, telling `observer` how far it
+/// is and showing it the film after every pass ([`next_pass`] sizes them). A stop the user
+/// asks for ([`crate::interrupt`]) ends the render after the pass under way, or at once.
 pub fn render(
     scene: &Scene,
     strategy: &LightStrategy,
     settings: &RenderSettings,
-    progress: Option<&ProgressBar>,
-    on_pass: &mut dyn FnMut(&Film, Duration),
+    observer: &mut dyn RenderObserver,
 ) -> RenderOutput {
     let size = scene.camera.resolution();
     let pixels = size.x as u64 * size.y as u64;
     let mut film = Film::new(size, settings.aovs.wants_first_hit());
     let mut stats = RenderStats::default();
     let start = Instant::now();
-    if let Some(pb) = progress {
-        pb.set_length(match settings.budget {
-            Budget::Spp(n) => pixels * n as u64,
-            Budget::Time(limit) => limit.as_millis() as u64,
-        });
-    }
-    let mut per_spp = None;
+    observer.start(match settings.budget {
+        Budget::Spp(n) => pixels * n as u64,
+        Budget::Time(limit) => limit.as_millis() as u64,
+    });
+    let (mut per_spp, mut reported_ms) = (None, 0);
     while let Some(count) = next_pass(settings.budget, film.spp(), per_spp, start.elapsed()) {
         let t0 = Instant::now();
         let fixed = matches!(settings.budget, Budget::Spp(_));
         let first = film.spp();
-        let (c, bad) = render_pass(scene, strategy, settings, &mut film, first, count, progress.filter(|_| fixed));
+        let progress = Some(&*observer).filter(|_| fixed);
+        let (c, bad) = render_pass(scene, strategy, settings, &mut film, first, count, progress);
         stats.rays.add(&c);
         stats.non_finite_samples += bad;
         per_spp = Some(t0.elapsed() / count);
@@ -211,9 +232,11 @@ pub fn render(
         if stats.stopped == Stop::Now {
             break;
         }
-        on_pass(&film, start.elapsed());
-        if let (Some(pb), Budget::Time(limit)) = (progress, settings.budget) {
-            pb.set_position(start.elapsed().as_millis().min(limit.as_millis()) as u64);
+        observer.pass(&film, start.elapsed());
+        if let Budget::Time(limit) = settings.budget {
+            let ms = start.elapsed().min(limit).as_millis() as u64;
+            observer.advance(ms - reported_ms);
+            reported_ms = ms;
         }
         if stats.stopped == Stop::AfterPass {
             break;

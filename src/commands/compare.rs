@@ -10,35 +10,40 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use super::render::progress_bar;
-use super::{DEFAULT_MAX_DEPTH, SceneOptions, load_scene};
+use super::progress::Progress;
+use super::settings::{COMPARE_DEFAULT_SPP, RenderRequest, Resolved};
+use super::{SceneOptions, load_scene};
 use crate::compare::images::{SheetColumn, contact_sheet, error_picture, preview_picture};
-use crate::compare::metrics::{bias_check, efficiency, error_metrics, relative_error_map};
+use crate::compare::metrics::{BIAS_ALPHA, bias_check, efficiency, error_metrics, relative_error_map};
 use crate::compare::plot::{Curve, convergence_svg};
-use crate::compare::report::{CompareReport, ReferenceInfo, RunResult, SamplerResult, Stat};
+use crate::compare::report::{CompareReport, ReferenceInfo, RunResult, SamplerResult, Stat, num};
 use crate::error::{Error, Result};
-use crate::film::{AovSet, Film, Layers};
+use crate::film::{AovSet, Film};
 use crate::fingerprint::Fingerprint;
 use crate::interrupt::Stop;
-use crate::light_sampler::{LightSamplerKind, LightStrategy};
+use crate::light_sampler::LightStrategy;
 use crate::math::{Rgb, UVec2};
-use crate::render::{Budget, RenderSettings, render};
+use crate::render::{Budget, RenderObserver, RenderSettings, render};
 use crate::scene::{BuildOptions, Scene};
+use crate::settings::LightSamplerKind;
 
-/// The reference's seed: no compared run (seeds 1..=K) uses it.
+/// The samplers compared when none are named (the scene's own is added to them).
+pub const DEFAULT_SAMPLERS: [LightSamplerKind; 4] =
+    [LightSamplerKind::Uniform, LightSamplerKind::Power, LightSamplerKind::Local, LightSamplerKind::Tree];
+
+/// The reference's seed: no compared run (seeds S+1..=S+K) uses it.
 pub const REFERENCE_SEED: u64 = 0x5eed_0000_0000_0000;
-/// Significance of the bias flag (before the Šidák correction over samplers).
-pub const BIAS_ALPHA: f64 = 0.001;
 
 /// What to compare and how.
 #[derive(Clone, Debug)]
 pub struct CompareOptions {
     /// Scene file.
     pub scene: PathBuf,
-    /// Samplers, in report order.
-    pub samplers: Vec<LightSamplerKind>,
-    /// Equal spp or equal time, per sampler and seed.
-    pub budget: Budget,
+    /// Samplers, in report order; `None`: [`DEFAULT_SAMPLERS`] and the scene's own sampler.
+    pub samplers: Option<Vec<LightSamplerKind>>,
+    /// Equal spp (default [`COMPARE_DEFAULT_SPP`]) or equal time per sampler and seed, the
+    /// base seed (runs use the seeds after it) and the depth; the sampler is ignored.
+    pub settings: RenderRequest,
     /// A reference EXR to measure against; otherwise one is rendered (and cached).
     pub reference: Option<PathBuf>,
     /// spp of a rendered reference.
@@ -52,8 +57,6 @@ pub struct CompareOptions {
     pub out_dir: PathBuf,
     /// Image size.
     pub resolution: Option<UVec2>,
-    /// Maximum scattering events.
-    pub max_depth: Option<u32>,
     /// Camera name.
     pub camera: Option<String>,
     /// How to read the scene file.
@@ -69,12 +72,6 @@ struct Reference {
     pixels: Vec<Rgb>,
     variance: Vec<Rgb>,
     info: ReferenceInfo,
-}
-
-fn rgb_of(layers: &Layers, prefix: &str) -> Option<Vec<Rgb>> {
-    let ch = |c: &str| layers.channel(&if prefix.is_empty() { c.to_string() } else { format!("{prefix}.{c}") });
-    let (r, g, b) = (ch("R")?, ch("G")?, ch("B")?);
-    Some((0..r.data.len()).map(|i| Rgb::new(r.data[i], g.data[i], b.data[i])).collect())
 }
 
 /// A reference as read from disk: RGB, variance (zeros when absent) and header attributes.
@@ -97,8 +94,8 @@ fn read_reference(path: &Path, size: UVec2) -> Result<ReferenceFile> {
         });
     }
     let pixels =
-        rgb_of(&layers, "").ok_or_else(|| Error::Input { path: path.into(), message: "no R, G, B channels".into() })?;
-    let variance = rgb_of(&layers, "variance").unwrap_or_else(|| vec![Rgb::ZERO; pixels.len()]);
+        layers.rgb().ok_or_else(|| Error::Input { path: path.into(), message: "no R, G, B channels".into() })?;
+    let variance = layers.rgb_layer("variance").unwrap_or_else(|| vec![Rgb::ZERO; pixels.len()]);
     Ok(ReferenceFile { pixels, variance, meta })
 }
 
@@ -153,9 +150,7 @@ fn reference(opts: &CompareOptions, scene: &Scene, max_depth: u32) -> Result<Ref
     let strategy = LightStrategy::build(sampler, &scene.lights, scene.radius);
     let aovs = AovSet { variance: true, ..Default::default() };
     let settings = RenderSettings { budget: Budget::Spp(opts.reference_spp), seed: REFERENCE_SEED, max_depth, aovs };
-    let pb = progress_bar(opts.progress, "ref");
-    let out = render(scene, &strategy, &settings, Some(&pb), &mut |_, _| {});
-    pb.finish_and_clear();
+    let out = render(scene, &strategy, &settings, &mut Progress::new(opts.progress, "ref"));
     // A reference stopped short is not the reference its key describes.
     if out.stats.stopped != Stop::No {
         return Err(Error::Interrupted);
@@ -174,162 +169,293 @@ fn reference(opts: &CompareOptions, scene: &Scene, max_depth: u32) -> Result<Ref
     Ok(Reference { pixels, variance, info })
 }
 
-/// Runs the comparison and writes every output into `opts.out_dir`.
-pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
-    if opts.samplers.is_empty() || opts.seeds == 0 {
-        return Err(Error::Usage("give at least one sampler and one seed".into()));
+/// What the comparison renders, every choice made: the samplers in report order, the
+/// budget and depth of each run, and the seeds each sampler renders with.
+struct Plan {
+    samplers: Vec<LightSamplerKind>,
+    budget: Budget,
+    max_depth: u32,
+    seeds: Vec<u64>,
+}
+
+impl Plan {
+    /// The command line's choices over the scene's, over the defaults.
+    fn new(opts: &CompareOptions, scene: &Scene) -> Result<Self> {
+        let Resolved { budget, seed, max_depth, .. } = opts.settings.resolve(&scene.render, COMPARE_DEFAULT_SPP)?;
+        let samplers = opts.samplers.clone().unwrap_or_else(|| {
+            let mut samplers = DEFAULT_SAMPLERS.to_vec();
+            samplers.extend(scene.render.sampler.filter(|s| !samplers.contains(s)));
+            samplers
+        });
+        if samplers.is_empty() || opts.seeds == 0 {
+            return Err(Error::Usage("give at least one sampler and one seed".into()));
+        }
+        let seeds = (1..=opts.seeds as u64).map(|k| seed.wrapping_add(k)).collect();
+        Ok(Self { samplers, budget, max_depth, seeds })
     }
+
+    fn settings(&self, seed: u64) -> RenderSettings {
+        RenderSettings { budget: self.budget, seed, max_depth: self.max_depth, aovs: AovSet::default() }
+    }
+
+    /// The bias flag's level for one sampler: [`BIAS_ALPHA`] over all of them (Šidák).
+    fn bias_alpha(&self) -> f64 {
+        1.0 - (1.0 - BIAS_ALPHA).powf(1.0 / self.samplers.len() as f64)
+    }
+
+    fn mode(&self) -> String {
+        match self.budget {
+            Budget::Spp(n) => format!("equal spp ({n})"),
+            Budget::Time(t) => format!("equal time ({} s)", t.as_secs_f64()),
+        }
+    }
+}
+
+/// Runs the comparison and writes every output into `opts.out_dir`: reference → each sampler
+/// with each seed → ranking → contact sheet, plot and reports.
+pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
     let scene_options = SceneOptions {
         load: opts.load,
         build: BuildOptions { resolution: opts.resolution, camera: opts.camera.clone() },
     };
     // The scene must load before the output folder is made: a broken scene leaves nothing.
     let loaded = load_scene(Some(&opts.scene), &scene_options)?;
+    let scene = &loaded.scene;
+    let plan = Plan::new(opts, scene)?;
     // Ctrl-C stops the comparison (after the pass under way) and writes no report.
     let _busy = crate::interrupt::busy();
     crate::io::ensure_dir(&opts.out_dir)?;
-    let scene = &loaded.scene;
-    let max_depth = opts.max_depth.or(scene.render.max_depth).unwrap_or(DEFAULT_MAX_DEPTH);
+    let reference = reference(opts, scene, plan.max_depth)?;
     let size = scene.camera.resolution();
-    let reference = reference(opts, scene, max_depth)?;
-    let out = |name: &str| opts.out_dir.join(name);
-    let file = |p: &Path| p.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned());
-
-    let mut results = Vec::new();
     let mut columns = vec![SheetColumn {
         title: "reference".into(),
         caption: reference.info.origin.replacen(", seed", "\nseed", 1),
         render: preview_picture(size, &reference.pixels, opts.exposure),
         error: None,
     }];
-    let alpha = 1.0 - (1.0 - BIAS_ALPHA).powf(1.0 / opts.samplers.len() as f64);
-    for &kind in &opts.samplers {
-        let t = Instant::now();
-        let strategy = LightStrategy::build(kind, &scene.lights, scene.radius);
-        let build_seconds = t.elapsed().as_secs_f64();
-        let mut runs = Vec::new();
-        let mut first: Option<Film> = None;
-        let (mut mean, mut mean_var) =
-            (vec![Rgb::ZERO; reference.pixels.len()], vec![Rgb::ZERO; reference.pixels.len()]);
-        let mut sum_sq = vec![Rgb::ZERO; reference.pixels.len()];
-        for seed in 1..=opts.seeds as u64 {
-            let settings = RenderSettings { budget: opts.budget, seed, max_depth, aovs: AovSet::default() };
-            let pb = progress_bar(opts.progress, kind.name());
-            let mut convergence = Vec::new();
-            let r = render(scene, &strategy, &settings, Some(&pb), &mut |film, elapsed| {
-                if let Ok(m) = error_metrics(&film.means(), &reference.pixels) {
-                    convergence.push((elapsed.as_secs_f64(), m.rel_mse));
-                }
-            });
-            pb.finish_and_clear();
-            if r.stats.stopped != Stop::No {
-                return Err(Error::Interrupted);
-            }
-            let pixels = r.film.means();
-            let m = error_metrics(&pixels, &reference.pixels)?;
-            let seconds = r.stats.elapsed.as_secs_f64();
-            for i in 0..pixels.len() {
-                mean[i] += pixels[i] / opts.seeds as f32;
-                sum_sq[i] += pixels[i] * pixels[i];
-                mean_var[i] += r.film.variance_of_mean(i) / (opts.seeds * opts.seeds) as f32;
-            }
-            runs.push(RunResult {
-                seed,
-                seconds,
-                spp: r.stats.spp,
-                mse: m.mse,
-                rel_mse: m.rel_mse,
-                efficiency: efficiency(m.rel_mse, seconds),
-                convergence,
-            });
-            first.get_or_insert(r.film);
-        }
-        if opts.seeds > 1 {
-            // The spread across seeds also estimates the variance of the mean, and unlike the
-            // films' own estimate it exists at 1 spp; take the larger of the two.
-            let k = opts.seeds as f32;
-            for i in 0..mean.len() {
-                let across = (sum_sq[i] - k * mean[i] * mean[i]).max(Rgb::ZERO) / (k * (k - 1.0));
-                mean_var[i] = mean_var[i].max(across);
-            }
-        }
-        let film = first.expect("at least one seed");
-        let pixels = film.means();
-        let (exr, err_png) = (out(&format!("{kind}.exr")), out(&format!("{kind}-error.png")));
-        let meta = super::render::provenance(
-            &opts.scene.display().to_string(),
-            kind,
-            &RenderSettings { budget: opts.budget, seed: 1, max_depth, aovs: AovSet::default() },
-            &crate::render::RenderStats {
-                spp: runs[0].spp,
-                elapsed: std::time::Duration::from_secs_f64(runs[0].seconds),
-                ..Default::default()
-            },
-        );
-        crate::io::exr::write(&exr, &film.layers(AovSet::default()), &meta)?;
-        let errors = error_picture(size, &relative_error_map(&pixels, &reference.pixels));
-        crate::io::png::write_srgb8(&err_png, size, errors.bytes.clone())?;
-        let stat = |f: &dyn Fn(&RunResult) -> f64| Stat::of(&runs.iter().map(f).collect::<Vec<_>>());
-        let result = SamplerResult {
-            sampler: kind.name().into(),
-            build_seconds,
-            memory_bytes: strategy.memory_bytes(),
-            seconds: stat(&|r| r.seconds),
-            spp: stat(&|r| r.spp as f64),
-            mse: stat(&|r| r.mse),
-            rel_mse: stat(&|r| r.rel_mse),
-            efficiency: stat(&|r| r.efficiency),
-            efficiency_vs_best: 0.0,
-            bias: bias_check(&mean, &mean_var, &reference.pixels, &reference.variance, alpha),
-            files: vec![file(&exr), file(&err_png)],
-            runs,
-        };
-        columns.push(SheetColumn {
-            title: kind.name().into(),
-            caption: format!(
-                "{} spp, {:.2} s\nrelMSE {}",
-                result.runs[0].spp,
-                result.runs[0].seconds,
-                crate::compare::report::num(result.runs[0].rel_mse)
-            ),
-            render: preview_picture(size, &pixels, opts.exposure),
-            error: Some(errors),
-        });
+    let mut results = Vec::new();
+    for &kind in &plan.samplers {
+        let runs = run_sampler(opts, &plan, scene, kind, &reference)?;
+        let (result, column) = record_sampler(opts, &plan, scene, runs, &reference)?;
         results.push(result);
+        columns.push(column);
     }
-    let best = results.iter().map(|r| r.efficiency.mean).fold(0.0f64, f64::max);
-    for r in &mut results {
-        r.efficiency_vs_best = if best > 0.0 { r.efficiency.mean / best } else { 0.0 };
-    }
-
-    let mode = match opts.budget {
-        Budget::Spp(n) => format!("equal spp ({n})"),
-        Budget::Time(t) => format!("equal time ({} s)", t.as_secs_f64()),
-    };
-    let mut report = CompareReport {
+    rank(&mut results);
+    let report = CompareReport {
         scene: opts.scene.display().to_string(),
-        mode,
+        mode: plan.mode(),
         resolution: [size.x, size.y],
-        max_depth,
+        max_depth: plan.max_depth,
         threads: rayon::current_num_threads(),
         reference: reference.info,
         samplers: results,
         files: Vec::new(),
     };
-    let sheet = contact_sheet(&columns);
+    write_report(opts, report, &columns)
+}
+
+/// One sampler's renders over every seed.
+struct SamplerRuns {
+    kind: LightSamplerKind,
+    build_seconds: f64,
+    memory_bytes: usize,
+    runs: Vec<RunResult>,
+    /// The first seed's film: the render written and shown.
+    first: Film,
+    /// The mean over seeds and that mean's variance, for the bias check.
+    mean: Vec<Rgb>,
+    mean_variance: Vec<Rgb>,
+}
+
+/// Watches one run: its progress bar, and the relMSE after every pass.
+struct Convergence<'a> {
+    progress: Progress,
+    reference: &'a [Rgb],
+    points: Vec<(f64, f64)>,
+}
+
+impl RenderObserver for Convergence<'_> {
+    fn start(&self, total: u64) {
+        self.progress.start(total);
+    }
+
+    fn advance(&self, n: u64) {
+        self.progress.advance(n);
+    }
+
+    fn pass(&mut self, film: &Film, elapsed: std::time::Duration) {
+        if let Ok(m) = error_metrics(&film.means(), self.reference) {
+            self.points.push((elapsed.as_secs_f64(), m.rel_mse));
+        }
+    }
+}
+
+/// Renders `kind` with every seed of the plan and measures each run against the reference.
+fn run_sampler(
+    opts: &CompareOptions,
+    plan: &Plan,
+    scene: &Scene,
+    kind: LightSamplerKind,
+    reference: &Reference,
+) -> Result<SamplerRuns> {
+    let t = Instant::now();
+    let strategy = LightStrategy::build(kind, &scene.lights, scene.radius);
+    let build_seconds = t.elapsed().as_secs_f64();
+    let mut seeds = SeedStatistics::new(reference.pixels.len());
+    let (mut runs, mut first) = (Vec::new(), None);
+    for &seed in &plan.seeds {
+        let mut watch = Convergence {
+            progress: Progress::new(opts.progress, kind.name()),
+            reference: &reference.pixels,
+            points: vec![],
+        };
+        let r = render(scene, &strategy, &plan.settings(seed), &mut watch);
+        if r.stats.stopped != Stop::No {
+            return Err(Error::Interrupted);
+        }
+        let m = error_metrics(&r.film.means(), &reference.pixels)?;
+        let seconds = r.stats.elapsed.as_secs_f64();
+        seeds.add(&r.film);
+        runs.push(RunResult {
+            seed,
+            seconds,
+            spp: r.stats.spp,
+            mse: m.mse,
+            rel_mse: m.rel_mse,
+            efficiency: efficiency(m.rel_mse, seconds),
+            convergence: watch.points,
+        });
+        first.get_or_insert(r.film);
+    }
+    let (mean, mean_variance) = seeds.finish();
+    let first = first.expect("a plan has at least one seed");
+    Ok(SamplerRuns { kind, build_seconds, memory_bytes: strategy.memory_bytes(), runs, first, mean, mean_variance })
+}
+
+/// The mean image over seeds and the variance of that mean.
+struct SeedStatistics {
+    count: u32,
+    sum: Vec<Rgb>,
+    sum_sq: Vec<Rgb>,
+    /// Σ of the films' own variance-of-the-mean estimates.
+    film_variance: Vec<Rgb>,
+}
+
+impl SeedStatistics {
+    fn new(pixels: usize) -> Self {
+        Self {
+            count: 0,
+            sum: vec![Rgb::ZERO; pixels],
+            sum_sq: vec![Rgb::ZERO; pixels],
+            film_variance: vec![Rgb::ZERO; pixels],
+        }
+    }
+
+    fn add(&mut self, film: &Film) {
+        self.count += 1;
+        for (i, p) in film.means().into_iter().enumerate() {
+            self.sum[i] += p;
+            self.sum_sq[i] += p * p;
+            self.film_variance[i] += film.variance_of_mean(i);
+        }
+    }
+
+    /// The mean, and its variance: the films' own estimate, or with several seeds the
+    /// spread across them where larger (unlike the films' estimate it exists at 1 spp).
+    fn finish(self) -> (Vec<Rgb>, Vec<Rgb>) {
+        let k = self.count as f32;
+        let mean: Vec<Rgb> = self.sum.iter().map(|&s| s / k).collect();
+        let variance = (0..mean.len())
+            .map(|i| {
+                let own = self.film_variance[i] / (k * k);
+                if self.count < 2 {
+                    return own;
+                }
+                let across = (self.sum_sq[i] - k * mean[i] * mean[i]).max(Rgb::ZERO) / (k * (k - 1.0));
+                own.max(across)
+            })
+            .collect();
+        (mean, variance)
+    }
+}
+
+/// Writes a sampler's render and error map and turns its runs into the report's numbers and
+/// the contact sheet's column.
+fn record_sampler(
+    opts: &CompareOptions,
+    plan: &Plan,
+    scene: &Scene,
+    s: SamplerRuns,
+    reference: &Reference,
+) -> Result<(SamplerResult, SheetColumn)> {
+    let size = scene.camera.resolution();
+    let pixels = s.first.means();
+    let (exr, err_png) =
+        (opts.out_dir.join(format!("{}.exr", s.kind)), opts.out_dir.join(format!("{}-error.png", s.kind)));
+    let stats = crate::render::RenderStats {
+        spp: s.runs[0].spp,
+        elapsed: std::time::Duration::from_secs_f64(s.runs[0].seconds),
+        ..Default::default()
+    };
+    let meta =
+        super::render::provenance(&opts.scene.display().to_string(), s.kind, &plan.settings(s.runs[0].seed), &stats);
+    crate::io::exr::write(&exr, &s.first.layers(AovSet::default()), &meta)?;
+    let errors = error_picture(size, &relative_error_map(&pixels, &reference.pixels));
+    crate::io::png::write_srgb8(&err_png, size, errors.bytes.clone())?;
+    let stat = |f: &dyn Fn(&RunResult) -> f64| Stat::of(&s.runs.iter().map(f).collect::<Vec<_>>());
+    let first = &s.runs[0];
+    let column = SheetColumn {
+        title: s.kind.name().into(),
+        caption: format!("{} spp, {:.2} s\nrelMSE {}", first.spp, first.seconds, num(first.rel_mse)),
+        render: preview_picture(size, &pixels, opts.exposure),
+        error: Some(errors),
+    };
+    let result = SamplerResult {
+        sampler: s.kind.name().into(),
+        build_seconds: s.build_seconds,
+        memory_bytes: s.memory_bytes,
+        seconds: stat(&|r| r.seconds),
+        spp: stat(&|r| r.spp as f64),
+        mse: stat(&|r| r.mse),
+        rel_mse: stat(&|r| r.rel_mse),
+        efficiency: stat(&|r| r.efficiency),
+        efficiency_vs_best: 0.0,
+        bias: bias_check(&s.mean, &s.mean_variance, &reference.pixels, &reference.variance, plan.bias_alpha()),
+        files: vec![file_name(&exr), file_name(&err_png)],
+        runs: s.runs,
+    };
+    Ok((result, column))
+}
+
+/// Each sampler's mean efficiency against the best one's.
+fn rank(results: &mut [SamplerResult]) {
+    let best = results.iter().map(|r| r.efficiency.mean).fold(0.0f64, f64::max);
+    for r in results {
+        r.efficiency_vs_best = if best > 0.0 { r.efficiency.mean / best } else { 0.0 };
+    }
+}
+
+fn file_name(p: &Path) -> String {
+    p.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned())
+}
+
+/// Writes the contact sheet, the convergence plot, report.md and report.json.
+fn write_report(opts: &CompareOptions, mut report: CompareReport, columns: &[SheetColumn]) -> Result<CompareReport> {
+    let out = |name: &str| opts.out_dir.join(name);
     let (sheet_path, plot_path, md_path, json_path) =
         (out("contact-sheet.png"), out("convergence.svg"), out("report.md"), out("report.json"));
+    let sheet = contact_sheet(columns);
     crate::io::png::write_srgb8(&sheet_path, sheet.size, sheet.bytes)?;
     let curves: Vec<Curve> = report
         .samplers
         .iter()
         .map(|s| Curve { name: s.sampler.clone(), points: s.runs[0].convergence.clone() })
         .collect();
-    let svg = convergence_svg(&format!("{} ({})", file(&opts.scene), report.mode), &curves)
+    let svg = convergence_svg(&format!("{} ({})", file_name(&opts.scene), report.mode), &curves)
         .map_err(|m| Error::Output { path: plot_path.clone(), message: m })?;
     crate::io::write_text(&plot_path, &svg)?;
-    report.files = [&sheet_path, &plot_path, &md_path, &json_path].iter().map(|p| file(p)).collect();
-    crate::io::write_text(&md_path, &report.markdown(&file(&sheet_path), &file(&plot_path)))?;
+    report.files = [&sheet_path, &plot_path, &md_path, &json_path].iter().map(|p| file_name(p)).collect();
+    crate::io::write_text(&md_path, &report.markdown(&file_name(&sheet_path), &file_name(&plot_path)))?;
     let json = serde_json::to_string_pretty(&report)
         .map_err(|e| Error::Output { path: json_path.clone(), message: e.to_string() })?;
     crate::io::write_text(&json_path, &json)?;

@@ -8,7 +8,9 @@
 pub mod compare;
 pub mod diff;
 pub mod info;
+pub mod progress;
 pub mod render;
+pub mod settings;
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -22,12 +24,6 @@ pub const DEFAULT_SCENE: &str = include_str!("../../scenes/cornell-5x5.ron");
 
 /// Name under which [`DEFAULT_SCENE`] appears in messages and file headers.
 pub const DEFAULT_SCENE_NAME: &str = "<built-in cornell-5x5>";
-
-/// Samples per pixel when neither the command line nor the scene says.
-pub const DEFAULT_SPP: u32 = 64;
-/// Scattering events when neither the command line nor the scene says (Cycles' default 8
-/// bounces, like the reference renders).
-pub const DEFAULT_MAX_DEPTH: u32 = 8;
 
 /// How to read and build a scene.
 #[derive(Clone, Debug, Default)]

@@ -5,23 +5,18 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-
-use super::{
-    DEFAULT_MAX_DEPTH, DEFAULT_SCENE_NAME, DEFAULT_SPP, LoadedScene, SceneOptions, human_duration, human_rate,
-    load_scene,
-};
+use super::progress::Progress;
+use super::settings::{DEFAULT_SPP, RenderRequest};
+use super::{DEFAULT_SCENE_NAME, LoadedScene, SceneOptions, human_duration, human_rate, load_scene};
 use crate::error::{Error, Result};
 use crate::film::AovSet;
 use crate::interrupt::Stop;
-use crate::light_sampler::{LightSamplerKind, LightStrategy};
+use crate::light_sampler::LightStrategy;
 use crate::limits::human_bytes;
 use crate::math::UVec2;
 use crate::render::{Budget, RenderOutput, RenderSettings, render as render_scene};
 use crate::scene::BuildOptions;
-
-/// The light sampler used when neither the command line nor the scene names one.
-pub const DEFAULT_SAMPLER: LightSamplerKind = LightSamplerKind::Tree;
+use crate::settings::LightSamplerKind;
 
 /// Everything `render` can be told; `None` fields fall back to the scene, then to defaults.
 #[derive(Clone, Debug, Default)]
@@ -34,20 +29,10 @@ pub struct RenderOptions {
     pub png: Option<PathBuf>,
     /// Write no PNG preview.
     pub no_png: bool,
-    /// Samples per pixel.
-    pub spp: Option<u32>,
-    /// Render for this long instead of a fixed spp.
-    pub time: Option<Duration>,
-    /// Light sampler.
-    pub sampler: Option<LightSamplerKind>,
-    /// Random seed.
-    pub seed: Option<u64>,
+    /// Budget, sampler, seed and depth as the command line asks them.
+    pub settings: RenderRequest,
     /// Output size.
     pub resolution: Option<UVec2>,
-    /// Maximum scattering events.
-    pub max_depth: Option<u32>,
-    /// Direct lighting only (max depth 1).
-    pub direct_only: bool,
     /// Camera name.
     pub camera: Option<String>,
     /// How to read the scene file.
@@ -78,34 +63,6 @@ pub struct RenderReport {
     pub output: RenderOutput,
     /// Files written.
     pub written: Vec<PathBuf>,
-}
-
-/// Settings after applying command line, then scene file, then defaults.
-fn resolve(opts: &RenderOptions, loaded: &LoadedScene) -> Result<(RenderSettings, LightSamplerKind)> {
-    let r = &loaded.scene.render;
-    let budget = match (opts.time, opts.spp.or(r.spp)) {
-        (Some(t), _) => Budget::Time(t),
-        (None, Some(0)) => return Err(Error::Usage("--spp must be at least 1".into())),
-        (None, spp) => Budget::Spp(spp.unwrap_or(DEFAULT_SPP)),
-    };
-    let max_depth = if opts.direct_only { 1 } else { opts.max_depth.or(r.max_depth).unwrap_or(DEFAULT_MAX_DEPTH) };
-    let settings = RenderSettings { budget, seed: opts.seed.or(r.seed).unwrap_or(0), max_depth, aovs: opts.aovs };
-    Ok((settings, opts.sampler.or(r.sampler).unwrap_or(DEFAULT_SAMPLER)))
-}
-
-/// A progress bar on stderr when asked for and stderr is a terminal; hidden otherwise.
-pub fn progress_bar(show: bool, label: &str) -> ProgressBar {
-    let pb = ProgressBar::with_draw_target(
-        None,
-        if show { ProgressDrawTarget::stderr() } else { ProgressDrawTarget::hidden() },
-    );
-    pb.set_style(
-        ProgressStyle::with_template("{prefix:>8} [{bar:40}] {percent:>3}%  {elapsed} elapsed, ~{eta} left")
-            .unwrap()
-            .progress_chars("=> "),
-    );
-    pb.set_prefix(label.to_string());
-    pb
 }
 
 /// Header attributes recording how an image was made.
@@ -144,7 +101,8 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
         build: BuildOptions { resolution: opts.resolution, camera: opts.camera.clone() },
     };
     let loaded = load_scene(opts.scene.as_deref(), &scene_options)?;
-    let (settings, sampler) = resolve(opts, &loaded)?;
+    let resolved = opts.settings.resolve(&loaded.scene.render, DEFAULT_SPP)?;
+    let (settings, sampler) = (resolved.render_settings(opts.aovs), resolved.sampler);
     let scene = &loaded.scene;
 
     let t = Instant::now();
@@ -167,9 +125,7 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
             res.y
         );
     }
-    let pb = progress_bar(opts.progress, sampler.name());
-    let output = render_scene(scene, &strategy, &settings, Some(&pb), &mut |_, _| {});
-    pb.finish_and_clear();
+    let output = render_scene(scene, &strategy, &settings, &mut Progress::new(opts.progress, sampler.name()));
     if output.stats.stopped == Stop::Now {
         return Err(Error::Interrupted);
     }

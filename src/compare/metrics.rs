@@ -7,6 +7,10 @@ use crate::math::Rgb;
 /// ε of relMSE = mean((x − ref)² / (ref² + ε)): keeps dark pixels from dominating.
 pub const REL_MSE_EPSILON: f64 = 0.01;
 
+/// Significance of the bias flag over all samplers of a comparison (each is tested at the
+/// Šidák-corrected level).
+pub const BIAS_ALPHA: f64 = 0.001;
+
 /// Error of an image against a reference.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct ErrorMetrics {

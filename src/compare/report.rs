@@ -2,7 +2,7 @@
 
 use serde::Serialize;
 
-use super::metrics::BiasCheck;
+use super::metrics::{BIAS_ALPHA, BiasCheck, REL_MSE_EPSILON};
 
 /// Mean and standard deviation of a quantity over seeds.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
@@ -169,9 +169,12 @@ impl CompareReport {
             if self.reference.reused { ", reused from an earlier run" } else { "" }
         );
         md += &self.table();
-        md += "\nrelMSE = mean((x − ref)² / (ref² + 0.01)); efficiency = 1 / (relMSE · render seconds); \
-               `vs best` divides by the best mean efficiency. A bias |z| beyond the 0.1% level \
-               (Šidák-corrected over samplers) is flagged: the mean over seeds disagrees with the reference.\n\n";
+        md += &format!(
+            "\nrelMSE = mean((x − ref)² / (ref² + {REL_MSE_EPSILON})); efficiency = 1 / (relMSE · render \
+             seconds); `vs best` divides by the best mean efficiency. A bias |z| beyond the {}% level \
+             (Šidák-corrected over samplers) is flagged: the mean over seeds disagrees with the reference.\n\n",
+            100.0 * BIAS_ALPHA
+        );
         md += &format!("![renders (top) and relative error (bottom)]({sheet})\n\n![relMSE against time]({plot})\n");
         md
     }

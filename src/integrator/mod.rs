@@ -7,6 +7,8 @@
 pub mod direct;
 pub mod path;
 
+pub use path::FirstHit;
+
 /// Rays traced by one worker, summed at the end of a render (no atomics on the hot path).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RayCounters {

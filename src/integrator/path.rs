@@ -8,14 +8,24 @@
 
 use super::RayCounters;
 use super::direct::{estimate_direct, selection_pmf};
-use crate::film::FirstHit;
 use crate::geometry::Ray;
 use crate::light::{Light, LightId};
 use crate::light_sampler::{LightStrategy, ShadingContext};
 use crate::material::ShadingPoint;
-use crate::math::{Rgb, power_heuristic};
+use crate::math::{Rgb, Vec3A, power_heuristic};
 use crate::sampling::{Dim, SampleStream};
 use crate::scene::Scene;
+
+/// First-hit data of one camera sample, for the AOVs.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FirstHit {
+    /// Base colour of the material hit.
+    pub albedo: Rgb,
+    /// Shading normal, facing the camera.
+    pub normal: Vec3A,
+    /// Distance along the camera ray.
+    pub depth: f32,
+}
 
 /// Russian roulette starts at this depth (after two scattering events), as in pbrt-v4.
 const RR_MIN_DEPTH: u32 = 2;

@@ -10,7 +10,7 @@ use std::path::Path;
 use exr::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::film::{Channel, Layers};
+use crate::image::{Channel, Layers};
 use crate::math::UVec2;
 
 /// Writes `layers` to `path` atomically, with `metadata` as text header attributes.

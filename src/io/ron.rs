@@ -18,9 +18,7 @@ use crate::light::{EnvironmentLight, SpotCurve};
 use crate::material::Material;
 use crate::math::{Mat4, Rgb, UVec2, Vec3A};
 use crate::scene::MAX_RESOLUTION;
-use crate::scene::description::{
-    CameraDesc, CameraPlacement, InstanceDesc, LightDesc, RenderDefaults, SceneDescription,
-};
+use crate::scene::description::{CameraDesc, CameraPlacement, InstanceDesc, LightDesc, SceneDescription};
 use crate::scene::format::{
     CameraSpec, EnvironmentSpec, LightSpec, MaterialSpec, ObjectSpec, SceneFile, TransformSpec,
 };
@@ -166,12 +164,7 @@ fn compile(file: SceneFile, source: &str, base_dir: &Path, options: &LoadOptions
             return Err(Error::scene(source, format!("render.{name}"), "must be at least 1, not 0"));
         }
     }
-    desc.render = RenderDefaults {
-        spp: file.render.spp,
-        max_depth: file.render.max_depth,
-        sampler: file.render.sampler,
-        seed: file.render.seed,
-    };
+    desc.render = file.render;
 
     let mut names: BTreeMap<String, u32> = BTreeMap::new();
     for (name, spec) in &file.materials {

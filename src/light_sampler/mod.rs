@@ -1,9 +1,11 @@
-//! Choosing one light per shading point: the contract, the samplers and the CLI's switch.
+//! Choosing one light per shading point: the contract and the samplers.
 //!
 //! Owns: [`ShadingContext`], [`SampledLight`], the [`LightSampler`] trait (what tests and
 //! benches are generic over), [`AnyLightSampler`] (the runtime choice, one `match` per call,
-//! no `dyn` on the hot path) and [`LightStrategy`], which adds the `all` estimator (every
-//! light, one shadow ray each; not a sampler) beside them. Depends on `light` and `math`.
+//! no `dyn` on the hot path) and [`LightStrategy`], built from a
+//! [`LightSamplerKind`], which adds the `all` estimator (every
+//! light, one shadow ray each; not a sampler) beside them. Depends on `light`, `math` and
+//! `settings`.
 
 mod local;
 mod power;
@@ -18,6 +20,7 @@ pub use uniform::UniformSampler;
 use crate::light::{Light, LightId};
 use crate::math::Vec3A;
 use crate::math::distribution::probability;
+use crate::settings::LightSamplerKind;
 
 /// Where a light is chosen for: a point and its (face-forwarded shading) normal. `n` is zero
 /// when the point is not on a surface. The same context must be used at `sample` time and
@@ -60,50 +63,6 @@ pub trait LightSampler: Sync {
     fn pmf(&self, ctx: &ShadingContext, light: LightId) -> f32 {
         let (start, end) = self.cell(ctx, light);
         probability(end - start)
-    }
-}
-
-/// The light-selection strategies the `--sampler` switch names.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum, serde::Deserialize, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum LightSamplerKind {
-    /// Every light at every shading point, one shadow ray each (the seed's baseline; O(n)).
-    All,
-    /// One light, uniformly at random.
-    Uniform,
-    /// One light, with probability proportional to its emitted power.
-    Power,
-    /// One light, from a CDF over every light's importance at the shading point (O(n)).
-    Local,
-    /// One light, by descending a light BVH with the same importance (O(log n)).
-    Tree,
-}
-
-impl LightSamplerKind {
-    /// Every sampler, in the order the command line lists them.
-    pub const ALL: [LightSamplerKind; 5] = [
-        LightSamplerKind::All,
-        LightSamplerKind::Uniform,
-        LightSamplerKind::Power,
-        LightSamplerKind::Local,
-        LightSamplerKind::Tree,
-    ];
-
-    /// The name used on the command line and in file headers.
-    pub fn name(self) -> &'static str {
-        match self {
-            LightSamplerKind::All => "all",
-            LightSamplerKind::Uniform => "uniform",
-            LightSamplerKind::Power => "power",
-            LightSamplerKind::Local => "local",
-            LightSamplerKind::Tree => "tree",
-        }
-    }
-}
-
-impl std::fmt::Display for LightSamplerKind {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
     }
 }
 

@@ -9,7 +9,6 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use crate::light::{EnvironmentLight, SpotCurve};
-use crate::light_sampler::LightSamplerKind;
 use crate::material::{Image, Material};
 use crate::math::{Mat4, Rgb, UVec2, Vec2, Vec3A};
 
@@ -23,7 +22,7 @@ pub struct SceneDescription {
     /// Output size the scene asks for, if any.
     pub resolution: Option<UVec2>,
     /// Render settings the scene asks for; the command line overrides them.
-    pub render: RenderDefaults,
+    pub render: crate::settings::RenderDefaults,
     /// Materials, indexed by [`MeshDesc::material`].
     pub materials: Vec<Material>,
     /// Decoded images, indexed by the materials' textures.
@@ -41,19 +40,6 @@ pub struct SceneDescription {
     pub inputs: Vec<PathBuf>,
     /// The environment, if any (with a label for messages).
     pub environment: Option<(String, EnvironmentLight)>,
-}
-
-/// Render settings a scene file may carry. `None` means "use myriad's default".
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct RenderDefaults {
-    /// Samples per pixel.
-    pub spp: Option<u32>,
-    /// Maximum number of scattering events.
-    pub max_depth: Option<u32>,
-    /// Light sampler.
-    pub sampler: Option<LightSamplerKind>,
-    /// Random seed.
-    pub seed: Option<u64>,
 }
 
 /// A perspective camera.

@@ -21,7 +21,7 @@ use std::collections::BTreeMap;
 
 use serde::Deserialize;
 
-use crate::light_sampler::LightSamplerKind;
+use crate::settings::RenderDefaults;
 
 /// Three numbers: a point, a direction or a colour.
 pub type V3 = [f32; 3];
@@ -37,7 +37,7 @@ pub struct SceneFile {
     pub film: FilmSpec,
     /// Render defaults (the command line overrides each).
     #[serde(default)]
-    pub render: RenderSpec,
+    pub render: RenderDefaults,
     /// Named materials, referred to by objects.
     #[serde(default)]
     pub materials: BTreeMap<String, MaterialSpec>,
@@ -106,20 +106,6 @@ fn default_up() -> V3 {
 pub struct FilmSpec {
     /// Width and height in pixels (default 640 × 480).
     pub resolution: Option<(u32, u32)>,
-}
-
-/// Render defaults.
-#[derive(Clone, Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RenderSpec {
-    /// Samples per pixel.
-    pub spp: Option<u32>,
-    /// Maximum scattering events (1 = direct lighting only).
-    pub max_depth: Option<u32>,
-    /// Light sampler: `all`, `uniform`, `power`, `local`, `tree`.
-    pub sampler: Option<LightSamplerKind>,
-    /// Random seed.
-    pub seed: Option<u64>,
 }
 
 /// A material.

@@ -73,7 +73,7 @@ pub struct Scene {
     /// Radius of that sphere (sizes directional lights' power).
     pub radius: f32,
     /// Render settings the scene asked for.
-    pub render: description::RenderDefaults,
+    pub render: crate::settings::RenderDefaults,
     /// Counts and timings.
     pub stats: SceneStats,
     /// What the loader and the build skipped or approximated.

@@ -228,11 +228,11 @@ fn an_exr_with_a_broken_header_is_an_error_not_an_allocation() {
     low_memory_limit();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("a.exr");
-    let layers = myriad::film::Layers {
+    let layers = myriad::image::Layers {
         size: UVec2::new(4, 3),
         channels: ["R", "G", "B"]
             .iter()
-            .map(|n| myriad::film::Channel { name: n.to_string(), data: vec![0.5; 12] })
+            .map(|n| myriad::image::Channel { name: n.to_string(), data: vec![0.5; 12] })
             .collect(),
     };
     myriad::io::exr::write(&path, &layers, &[]).unwrap();

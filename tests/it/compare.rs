@@ -2,9 +2,10 @@
 
 use myriad::commands::compare::{CompareOptions, compare};
 use myriad::commands::diff::diff;
-use myriad::light_sampler::LightSamplerKind;
+use myriad::commands::settings::RenderRequest;
 use myriad::math::UVec2;
 use myriad::render::Budget;
+use myriad::settings::LightSamplerKind;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -15,15 +16,25 @@ fn scene() -> PathBuf {
 fn options(out_dir: &Path, samplers: Vec<LightSamplerKind>, budget: Budget) -> CompareOptions {
     CompareOptions {
         scene: scene(),
-        samplers,
-        budget,
+        samplers: Some(samplers),
+        settings: RenderRequest {
+            spp: match budget {
+                Budget::Spp(n) => Some(n),
+                Budget::Time(_) => None,
+            },
+            time: match budget {
+                Budget::Time(t) => Some(t),
+                Budget::Spp(_) => None,
+            },
+            max_depth: Some(3),
+            ..Default::default()
+        },
         reference: None,
         reference_spp: 64,
         reference_sampler: None,
         seeds: 2,
         out_dir: out_dir.to_path_buf(),
         resolution: Some(UVec2::new(40, 30)),
-        max_depth: Some(3),
         camera: None,
         load: Default::default(),
         exposure: 0.0,
@@ -102,7 +113,7 @@ fn the_bias_flag_fires_for_a_biased_estimator() {
     assert!(!full.samplers[0].bias.flagged);
     let mut truncated = options(dir.path(), vec![LightSamplerKind::Tree, LightSamplerKind::Power], Budget::Spp(4));
     truncated.reference = Some(dir.path().join("reference.exr"));
-    truncated.max_depth = Some(1);
+    truncated.settings.max_depth = Some(1);
     let report = compare(&truncated).unwrap();
     for s in &report.samplers {
         assert!(s.bias.flagged && s.bias.z < 0.0, "{}: {:?}", s.sampler, s.bias);
@@ -180,9 +191,36 @@ fn the_cached_reference_is_keyed_on_every_input() {
     assert!(!reused(&opts), "another punctual scale renders again");
     opts.reference_spp = 3;
     assert!(!reused(&opts), "another reference spp renders again");
-    opts.max_depth = Some(2);
+    opts.settings.max_depth = Some(2);
     assert!(!reused(&opts), "another depth renders again");
     opts.camera = Some("camera".into());
     assert!(!reused(&opts), "another camera option renders again");
     assert!(reused(&opts));
+}
+
+#[test]
+fn compare_takes_what_the_scene_file_asks_unless_the_command_line_says_otherwise() {
+    // The scene's spp, seed, depth and sampler, resolved as `render` resolves them.
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-5x5.ron")).unwrap();
+    let scene = dir.path().join("box.ron");
+    std::fs::write(
+        &scene,
+        text.replace("render: (spp: 64, max_depth: 8)", "render: (spp: 2, max_depth: 2, seed: 7, sampler: all)"),
+    )
+    .unwrap();
+    let mut opts = options(&dir.path().join("out"), vec![], Budget::Spp(1));
+    (opts.scene, opts.samplers, opts.settings, opts.reference_spp) = (scene, None, RenderRequest::default(), 2);
+    let report = compare(&opts).unwrap();
+    let names: Vec<&str> = report.samplers.iter().map(|s| s.sampler.as_str()).collect();
+    assert_eq!(names, ["uniform", "power", "local", "tree", "all"]);
+    assert_eq!(report.max_depth, 2);
+    for s in &report.samplers {
+        let seeds: Vec<(u64, u32)> = s.runs.iter().map(|r| (r.seed, r.spp)).collect();
+        assert_eq!(seeds, [(8, 2), (9, 2)], "{}", s.sampler);
+    }
+    opts.settings = RenderRequest { spp: Some(1), seed: Some(0), max_depth: Some(1), ..Default::default() };
+    opts.samplers = Some(vec![LightSamplerKind::Power]);
+    let report = compare(&opts).unwrap();
+    assert_eq!((report.max_depth, report.samplers[0].runs[0].seed, report.samplers[0].runs[0].spp), (1, 1, 1));
 }

@@ -5,10 +5,10 @@
 
 use crate::common::{assert_mentions, chi_square, draw, load};
 use crate::render::render_with;
-use myriad::film::{Channel, Layers};
+use myriad::image::{Channel, Layers};
 use myriad::light::{EnvironmentLight, EnvironmentMap, Light};
-use myriad::light_sampler::LightSamplerKind;
 use myriad::math::{Rgb, UVec2, Vec3A};
+use myriad::settings::LightSamplerKind;
 use std::f64::consts::PI;
 use std::path::Path;
 use std::sync::Arc;

@@ -4,9 +4,9 @@
 
 use crate::common::{assert_mentions, blender, cornell, cornell_json, load, load_error};
 use crate::render::{compare_films, render_with};
-use myriad::light_sampler::LightSamplerKind;
 use myriad::math::{Rgb, UVec2};
 use myriad::scene::{AUTO_CAMERA, Scene};
+use myriad::settings::LightSamplerKind;
 use serde_json::json;
 use std::collections::BTreeMap;
 

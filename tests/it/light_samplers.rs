@@ -5,9 +5,10 @@
 
 use crate::common::{Stats, check_cells_at, draw, pick_chi_square, sidak, z_p_value};
 use myriad::light::{AreaEmission, DistantLight, Light, LightId, PointLight, QuadLight, SpotLight, TriangleLight};
-use myriad::light_sampler::{LightSampler, LightSamplerKind, LightStrategy, ShadingContext};
+use myriad::light_sampler::{LightSampler, LightStrategy, ShadingContext};
 use myriad::math::{Rgb, Vec3A};
 use myriad::sampling::{Dim, SampleStream};
+use myriad::settings::LightSamplerKind;
 
 /// Uniform number for test case `i`, stream `salt`.
 pub fn rnd(i: u64, salt: u64) -> f32 {

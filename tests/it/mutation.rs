@@ -10,10 +10,11 @@
 //! in `target/mutations/`.
 
 use myriad::commands::{SceneOptions, load_scene};
-use myriad::light_sampler::{LightSamplerKind, LightStrategy};
+use myriad::light_sampler::LightStrategy;
 use myriad::math::UVec2;
 use myriad::render::{Budget, RenderSettings, render};
 use myriad::scene::{AUTO_CAMERA, BuildOptions};
+use myriad::settings::LightSamplerKind;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -114,11 +115,11 @@ fn inputs() -> Vec<Input> {
     {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("x.exr");
-        let layers = myriad::film::Layers {
+        let layers = myriad::image::Layers {
             size: UVec2::new(5, 3),
             channels: ["R", "G", "B", "variance.R"]
                 .iter()
-                .map(|n| myriad::film::Channel { name: n.to_string(), data: (0..15).map(|i| i as f32).collect() })
+                .map(|n| myriad::image::Channel { name: n.to_string(), data: (0..15).map(|i| i as f32).collect() })
                 .collect(),
         };
         myriad::io::exr::write(&path, &layers, &[("myriad.spp".into(), "4".into())]).unwrap();
@@ -370,7 +371,7 @@ fn exercise(path: &Path) -> myriad::Result<()> {
     for kind in [LightSamplerKind::Tree, LightSamplerKind::Power] {
         let strategy = LightStrategy::build(kind, &scene.lights, scene.radius);
         let settings = RenderSettings { budget: Budget::Spp(1), seed: 1, max_depth: 3, aovs: Default::default() };
-        render(&scene, &strategy, &settings, None, &mut |_, _| {});
+        render(&scene, &strategy, &settings, &mut ());
     }
     Ok(())
 }

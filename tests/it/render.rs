@@ -4,20 +4,21 @@
 use crate::common::{polygon_irradiance, quad_light, scene_from, sidak, z_p_value};
 use myriad::commands::load_scene;
 use myriad::film::Film;
-use myriad::light_sampler::{LightSamplerKind, LightStrategy};
+use myriad::light_sampler::LightStrategy;
 use myriad::material::Material;
 use myriad::math::{Mat4, Rgb, UVec2, Vec2, Vec3A};
-use myriad::render::{Budget, RenderSettings, render};
+use myriad::render::{Budget, OnPass, RenderSettings, render};
 use myriad::scene::description::LightDesc;
 use myriad::scene::shapes::{box_mesh, quad_mesh};
 use myriad::scene::{BuildOptions, Scene};
+use myriad::settings::LightSamplerKind;
 
-pub const ALL_KINDS: [LightSamplerKind; 5] = LightSamplerKind::ALL;
+pub const ALL_KINDS: [LightSamplerKind; 5] = LightSamplerKind::EVERY;
 
 pub fn render_with(scene: &Scene, kind: LightSamplerKind, spp: u32, max_depth: u32, seed: u64) -> Film {
     let strategy = LightStrategy::build(kind, &scene.lights, scene.radius);
     let settings = RenderSettings { budget: Budget::Spp(spp), seed, max_depth, aovs: Default::default() };
-    render(scene, &strategy, &settings, None, &mut |_, _| {}).film
+    render(scene, &strategy, &settings, &mut ()).film
 }
 
 /// Z-test of the image mean against `expected` per pixel, and the fraction of pixel values
@@ -265,14 +266,14 @@ fn pass_boundaries_do_not_change_pixels() {
     let strategy = LightStrategy::build(LightSamplerKind::Uniform, &scene.lights, scene.radius);
     let settings = RenderSettings { budget: Budget::Spp(8), seed: 9, max_depth: 4, aovs: Default::default() };
     let mut passes = Vec::new();
-    render(&scene, &strategy, &settings, None, &mut |f, _| passes.push(f.spp()));
+    render(&scene, &strategy, &settings, &mut OnPass(|f: &myriad::film::Film, _| passes.push(f.spp())));
     assert_eq!(passes, [1, 2, 4, 8]);
     let timed = RenderSettings { budget: Budget::Time(std::time::Duration::from_millis(200)), ..settings };
     let mut timed_passes = Vec::new();
-    let out = render(&scene, &strategy, &timed, None, &mut |f, _| timed_passes.push(f.spp()));
+    let out = render(&scene, &strategy, &timed, &mut OnPass(|f: &myriad::film::Film, _| timed_passes.push(f.spp())));
     assert!(timed_passes.len() > 1 && timed_passes.windows(2).all(|w| w[0] < w[1]));
     let fixed = RenderSettings { budget: Budget::Spp(out.stats.spp), ..settings };
-    let again = render(&scene, &strategy, &fixed, None, &mut |_, _| {}).film;
+    let again = render(&scene, &strategy, &fixed, &mut ()).film;
     for i in 0..48 {
         assert_eq!(out.film.mean(i), again.mean(i), "pixel {i}");
     }
