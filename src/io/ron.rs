@@ -18,7 +18,7 @@ use crate::light::{EnvironmentLight, SpotCurve};
 use crate::material::Material;
 use crate::math::{Mat4, Rgb, UVec2, Vec3A};
 use crate::scene::MAX_RESOLUTION;
-use crate::scene::description::{CameraDesc, CameraPlacement, InstanceDesc, LightDesc, SceneDescription};
+use crate::scene::description::{CameraDesc, CameraPlacement, InstanceDesc, LightDesc, MeshDesc, SceneDescription};
 use crate::scene::format::{
     CameraSpec, EnvironmentSpec, LightSpec, MaterialSpec, ObjectSpec, SceneFile, TransformSpec,
 };
@@ -140,143 +140,181 @@ fn environment(
     })
 }
 
+/// Turns a parsed file into a description: camera → film and render settings → materials →
+/// objects → environment → lights.
 fn compile(file: SceneFile, source: &str, base_dir: &Path, options: &LoadOptions) -> Result<SceneDescription> {
-    let mut desc = SceneDescription { source: source.to_string(), ..Default::default() };
-    let CameraSpec::Perspective { eye, look_at, up, yfov_deg } = file.camera;
-    desc.cameras.push(CameraDesc {
-        name: "camera".into(),
-        placement: CameraPlacement::LookAt { eye: v3(eye), target: v3(look_at), up: v3(up) },
-        yfov: yfov_deg.to_radians(),
-        aspect_ratio: None,
-    });
-    desc.resolution = file.film.resolution.map(|(w, h)| UVec2::new(w, h));
-    if let Some(UVec2 { x, y }) = desc.resolution
-        && (x == 0 || y == 0 || x > MAX_RESOLUTION || y > MAX_RESOLUTION)
-    {
-        return Err(Error::scene(
-            source,
-            "film.resolution",
-            format!("{x} × {y} is not a usable image size (1 to {MAX_RESOLUTION} per side)"),
-        ));
+    let mut c = Compiler {
+        desc: SceneDescription { source: source.to_string(), ..Default::default() },
+        source,
+        base_dir,
+        options,
+        materials: BTreeMap::new(),
+    };
+    c.camera(&file.camera);
+    c.settings(&file)?;
+    c.materials(&file.materials);
+    for (i, obj) in file.objects.iter().enumerate() {
+        c.object(i, obj)?;
     }
-    for (name, value) in [("spp", file.render.spp), ("max_depth", file.render.max_depth)] {
-        if value == Some(0) {
-            return Err(Error::scene(source, format!("render.{name}"), "must be at least 1, not 0"));
+    if let Some(env) = &file.environment {
+        c.desc.environment = Some(environment(env, source, base_dir, &mut c.desc.inputs)?);
+    }
+    for (i, light) in file.lights.iter().enumerate() {
+        c.light(i, light)?;
+    }
+    Ok(c.desc)
+}
+
+/// The description being compiled and what its parts need: the file's name and folder, how
+/// to read included files, and the materials by name.
+struct Compiler<'a> {
+    desc: SceneDescription,
+    source: &'a str,
+    base_dir: &'a Path,
+    options: &'a LoadOptions,
+    materials: BTreeMap<String, u32>,
+}
+
+impl Compiler<'_> {
+    fn camera(&mut self, spec: &CameraSpec) {
+        let CameraSpec::Perspective { eye, look_at, up, yfov_deg } = *spec;
+        self.desc.cameras.push(CameraDesc {
+            name: "camera".into(),
+            placement: CameraPlacement::LookAt { eye: v3(eye), target: v3(look_at), up: v3(up) },
+            yfov: yfov_deg.to_radians(),
+            aspect_ratio: None,
+        });
+    }
+
+    /// The film's size and the render defaults, refused when empty or zero.
+    fn settings(&mut self, file: &SceneFile) -> Result<()> {
+        self.desc.resolution = file.film.resolution.map(|(w, h)| UVec2::new(w, h));
+        if let Some(UVec2 { x, y }) = self.desc.resolution
+            && (x == 0 || y == 0 || x > MAX_RESOLUTION || y > MAX_RESOLUTION)
+        {
+            return Err(Error::scene(
+                self.source,
+                "film.resolution",
+                format!("{x} × {y} is not a usable image size (1 to {MAX_RESOLUTION} per side)"),
+            ));
+        }
+        for (name, value) in [("spp", file.render.spp), ("max_depth", file.render.max_depth)] {
+            if value == Some(0) {
+                return Err(Error::scene(self.source, format!("render.{name}"), "must be at least 1, not 0"));
+            }
+        }
+        self.desc.render = file.render;
+        Ok(())
+    }
+
+    fn materials(&mut self, specs: &BTreeMap<String, MaterialSpec>) {
+        for (name, spec) in specs {
+            self.materials.insert(name.clone(), self.desc.materials.len() as u32);
+            self.desc.materials.push(material(name, spec));
         }
     }
-    desc.render = file.render;
 
-    let mut names: BTreeMap<String, u32> = BTreeMap::new();
-    for (name, spec) in &file.materials {
-        names.insert(name.clone(), desc.materials.len() as u32);
-        desc.materials.push(material(name, spec));
-    }
-    let lookup = |what: &str, name: &str| {
-        names.get(name).copied().ok_or_else(|| {
-            let known: Vec<&String> = names.keys().collect();
-            Error::scene(source, what, format!("unknown material '{name}'; the scene defines {known:?}"))
+    /// The index of the material `name`, or an error for `what` listing the names there are.
+    fn material(&self, what: &str, name: &str) -> Result<u32> {
+        self.materials.get(name).copied().ok_or_else(|| {
+            let known: Vec<&String> = self.materials.keys().collect();
+            Error::scene(self.source, what, format!("unknown material '{name}'; the scene defines {known:?}"))
         })
-    };
+    }
 
-    for (i, obj) in file.objects.iter().enumerate() {
-        let place = |desc: &mut SceneDescription, mesh: crate::scene::description::MeshDesc, m: Mat4, name: String| {
-            desc.meshes.push(mesh);
-            desc.instances.push(InstanceDesc { mesh: (desc.meshes.len() - 1) as u32, transform: m, name });
-        };
+    /// Adds a mesh and its one placement.
+    fn place(&mut self, mesh: MeshDesc, transform: Mat4, name: String) {
+        self.desc.meshes.push(mesh);
+        self.desc.instances.push(InstanceDesc { mesh: (self.desc.meshes.len() - 1) as u32, transform, name });
+    }
+
+    fn object(&mut self, i: usize, obj: &ObjectSpec) -> Result<()> {
         match obj {
             ObjectSpec::Quad { corner, edge1, edge2, material } => {
                 let what = format!("objects[{i}] Quad");
-                let m = lookup(&what, material)?;
-                place(
-                    &mut desc,
-                    shapes::quad_mesh(&what, v3(*corner), v3(*edge1), v3(*edge2), m),
-                    Mat4::IDENTITY,
-                    what,
-                );
+                let m = self.material(&what, material)?;
+                self.place(shapes::quad_mesh(&what, v3(*corner), v3(*edge1), v3(*edge2), m), Mat4::IDENTITY, what);
             }
             ObjectSpec::Box { size, transform: t, material } => {
                 let what = format!("objects[{i}] Box");
-                let m = lookup(&what, material)?;
-                place(&mut desc, shapes::box_mesh(&what, v3(*size), m), transform(t), what);
+                let m = self.material(&what, material)?;
+                self.place(shapes::box_mesh(&what, v3(*size), m), transform(t), what);
             }
             ObjectSpec::Sphere { center, radius, subdivisions, material } => {
                 let what = format!("objects[{i}] Sphere");
-                let m = lookup(&what, material)?;
+                let m = self.material(&what, material)?;
                 if !(*radius > 0.0) || *subdivisions > 8 {
-                    return Err(Error::scene(source, what, "needs radius > 0 and at most 8 subdivisions"));
+                    return Err(Error::scene(self.source, what, "needs radius > 0 and at most 8 subdivisions"));
                 }
-                place(
-                    &mut desc,
-                    shapes::sphere_mesh(&what, v3(*center), *radius, *subdivisions, m),
-                    Mat4::IDENTITY,
-                    what,
-                );
+                let mesh = shapes::sphere_mesh(&what, v3(*center), *radius, *subdivisions, m);
+                self.place(mesh, Mat4::IDENTITY, what);
             }
             ObjectSpec::Mesh { path, transform: t, material } => {
-                let what = format!("objects[{i}] Mesh");
-                let override_material = material.as_deref().map(|m| lookup(&what, m)).transpose()?;
-                let full = base_dir.join(path);
-                let ext = full.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
-                if ext == "ron" {
-                    return Err(Error::scene(
-                        source,
-                        what,
-                        "can include .obj, .gltf and .glb files, not other .ron scenes",
-                    ));
-                }
-                let loaded = super::load_scene(&full, options).map_err(|e| match e {
-                    Error::Io { source: io, .. } => {
-                        Error::scene(source, &what, format!("cannot read '{}': {io}", full.display()))
-                    }
-                    other => other,
-                })?;
-                desc.include(loaded, transform(t), override_material);
+                self.include(i, Path::new(path), t, material.as_deref())?
             }
         }
+        Ok(())
     }
 
-    if let Some(env) = &file.environment {
-        desc.environment = Some(environment(env, source, base_dir, &mut desc.inputs)?);
-    }
-
-    for (i, light) in file.lights.iter().enumerate() {
-        let name = |kind: &str| -> Arc<str> { Arc::from(format!("lights[{i}] {kind}")) };
-        match light {
-            LightSpec::Point { position, intensity } => desc.lights.push(LightDesc::Point {
-                name: name("Point"),
-                position: v3(*position),
-                intensity: v3(*intensity),
-            }),
-            LightSpec::Spot { position, direction, intensity, inner_deg, outer_deg } => {
-                desc.lights.push(LightDesc::Spot {
-                    name: name("Spot"),
-                    position: v3(*position),
-                    direction: v3(*direction),
-                    intensity: v3(*intensity),
-                    inner_angle: inner_deg.to_radians(),
-                    outer_angle: outer_deg.to_radians(),
-                    curve: SpotCurve::Quadratic,
-                })
+    /// Reads the OBJ or glTF file `path` and places its meshes and lights with `t`.
+    fn include(&mut self, i: usize, path: &Path, t: &TransformSpec, material: Option<&str>) -> Result<()> {
+        let what = format!("objects[{i}] Mesh");
+        let override_material = material.map(|m| self.material(&what, m)).transpose()?;
+        let full = self.base_dir.join(path);
+        let ext = full.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
+        if ext == "ron" {
+            return Err(Error::scene(
+                self.source,
+                what,
+                "can include .obj, .gltf and .glb files, not other .ron scenes",
+            ));
+        }
+        let loaded = super::load_scene(&full, self.options).map_err(|e| match e {
+            Error::Io { source: io, .. } => {
+                Error::scene(self.source, &what, format!("cannot read '{}': {io}", full.display()))
             }
-            LightSpec::Directional { direction, irradiance } => desc.lights.push(LightDesc::Directional {
+            other => other,
+        })?;
+        self.desc.include(loaded, transform(t), override_material);
+        Ok(())
+    }
+
+    fn light(&mut self, i: usize, light: &LightSpec) -> Result<()> {
+        let name = |kind: &str| -> Arc<str> { Arc::from(format!("lights[{i}] {kind}")) };
+        let desc = match light {
+            LightSpec::Point { position, intensity } => {
+                LightDesc::Point { name: name("Point"), position: v3(*position), intensity: v3(*intensity) }
+            }
+            LightSpec::Spot { position, direction, intensity, inner_deg, outer_deg } => LightDesc::Spot {
+                name: name("Spot"),
+                position: v3(*position),
+                direction: v3(*direction),
+                intensity: v3(*intensity),
+                inner_angle: inner_deg.to_radians(),
+                outer_angle: outer_deg.to_radians(),
+                curve: SpotCurve::Quadratic,
+            },
+            LightSpec::Directional { direction, irradiance } => LightDesc::Directional {
                 name: name("Directional"),
                 direction: v3(*direction),
                 irradiance: v3(*irradiance),
-            }),
-            LightSpec::Quad { corner, edge1, edge2, radiance, two_sided } => desc.lights.push(LightDesc::Quad {
+            },
+            LightSpec::Quad { corner, edge1, edge2, radiance, two_sided } => LightDesc::Quad {
                 name: name("Quad"),
                 corner: v3(*corner),
                 edge1: v3(*edge1),
                 edge2: v3(*edge2),
                 radiance: Rgb::from(*radiance),
                 two_sided: *two_sided,
-            }),
+            },
             LightSpec::Grid(g) => {
                 let label = format!("lights[{i}] Grid");
-                let lamps = shapes::light_grid(&label, g).map_err(|m| Error::scene(source, &label, m))?;
-                desc.lights.extend(lamps);
+                let lamps = shapes::light_grid(&label, g).map_err(|m| Error::scene(self.source, &label, m))?;
+                self.desc.lights.extend(lamps);
+                return Ok(());
             }
-        }
+        };
+        self.desc.lights.push(desc);
+        Ok(())
     }
-    Ok(desc)
 }

@@ -18,11 +18,10 @@ use super::description::{CameraDesc, CameraPlacement, LightDesc, SceneDescriptio
 use super::{Scene, SceneStats};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
-use crate::geometry::GeometryBuilder;
+use crate::geometry::Geometry;
 use crate::light::{Light, PointLight, SpotLight};
 use crate::limits::{BYTES_PER_INSTANCE, BYTES_PER_LIGHT, BYTES_PER_PIXEL, BYTES_PER_TRIANGLE, check_memory};
-use crate::material::Material;
-use crate::math::{Rgb, UVec2, Vec3A};
+use crate::math::{UVec2, Vec3A};
 
 /// Choices made when building, usually from the command line.
 #[derive(Clone, Debug, Default)]
@@ -135,7 +134,9 @@ fn check_size(desc: &SceneDescription, placements: &[(Vec<Placement>, bool)], re
     .map_err(|m| Error::scene(&desc.source, "scene", m))
 }
 
-/// Validates `desc` and builds the scene (BVH built in the current rayon pool).
+/// Validates `desc` and builds the scene (BVH built in the current rayon pool): validate →
+/// camera and size → memory check → place meshes → listed lights → BVH → bounds →
+/// directional powers and the environment → camera.
 pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
     let start = Instant::now();
     let file = desc.source.as_str();
@@ -146,67 +147,13 @@ pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
     check_size(&desc, &placements, resolution)?;
 
     let images = Arc::new(desc.images.clone());
-    let mut placer = Placer {
-        desc: &desc,
-        images: &images,
-        geo: GeometryBuilder::new(),
-        lights: Vec::new(),
-        stats: SceneStats::default(),
-        degenerate_emitters: 0,
-    };
-    for (mesh, (p, shared)) in desc.meshes.iter().zip(&placements) {
-        if *shared {
-            placer.place_shared(mesh, p)?;
-        } else {
-            for &placement in p {
-                placer.place_flat(mesh, placement)?;
-            }
-        }
-    }
-    let Placer { mut geo, mut lights, mut stats, degenerate_emitters, .. } = placer;
-
-    // Lights that are not meshes; quad lights are also two triangles that camera and BSDF
-    // rays can hit, with a black material of their own.
-    let mut materials = desc.materials.clone();
-    let mut emitter_material = None;
-    let listed = lights.len();
-    for (i, l) in desc.lights.iter().enumerate() {
-        let light = lights::light(file, i, l)?;
-        if let Light::Quad(q) = &light {
-            let mat = *emitter_material.get_or_insert_with(|| {
-                materials.push(Material { name: "<light>".into(), ..Material::diffuse("", Rgb::ZERO) });
-                (materials.len() - 1) as u32
-            });
-            for t in q.triangles() {
-                geo.push_triangle(t, [0, 1, 2], None, mat, lights.len() as u32, false);
-            }
-            stats.emissive_triangles += 2;
-        }
-        lights.push(light);
-    }
-
-    let mut warnings = desc.warnings.clone();
-    if degenerate_emitters > 0 {
-        warnings.push(format!("{degenerate_emitters} emissive triangles have zero area and do not emit"));
-    }
-
-    // Bounds of everything, for directional lights and reports.
-    let (mut lo, mut hi) = (Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN));
+    let mut placer = Placer::new(&desc, &images);
+    placer.place_meshes(&placements)?;
+    let listed = placer.lights.len();
+    placer.place_lights()?;
+    let Placer { geo, mut lights, mut stats, materials, degenerate_emitters, .. } = placer;
     let (geometry, _) = geo.build();
-    for (v, _) in geometry.world_triangles() {
-        for p in v {
-            lo = lo.min(p);
-            hi = hi.max(p);
-        }
-    }
-    for l in &lights {
-        if let Light::Point(PointLight { position, .. }) | Light::Spot(SpotLight { position, .. }) = l {
-            lo = lo.min(*position);
-            hi = hi.max(*position);
-        }
-    }
-    let (center, radius) =
-        if lo.x <= hi.x { (0.5 * (lo + hi), (0.5 * (hi - lo).length()).max(1e-3)) } else { (Vec3A::ZERO, 1.0) };
+    let (center, radius) = bounds(&geometry, &lights);
     // A directional light's power is its irradiance over the scene's disc.
     for (i, l) in desc.lights.iter().enumerate() {
         if let LightDesc::Directional { name, .. } = l {
@@ -215,28 +162,21 @@ pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
     }
     let environment = match &desc.environment {
         Some((name, env)) => {
-            let light = lights::environment(file, name, env, radius)?;
-            lights.push(light);
+            lights.push(lights::environment(file, name, env, radius)?);
             Some((lights.len() - 1) as u32)
         }
         None => None,
     };
-
     let (camera, camera_name) = match cam_desc {
         Some(c) => (scene_camera(file, c, resolution)?, c.name.clone()),
         None => (auto_camera(file, center, radius, resolution)?, AUTO_CAMERA.to_string()),
     };
-
-    let accel = geometry.accel.stats();
-    stats.meshes = desc.meshes.len();
-    stats.cameras = desc.cameras.iter().map(|c| c.name.clone()).collect();
-    stats.triangles = geometry.triangle_count();
-    stats.stored_triangles = geometry.stored_triangle_count();
-    stats.bvh_build_time = accel.build_time;
-    stats.geometry_bytes = geometry.memory_bytes();
+    let mut warnings = desc.warnings.clone();
+    if degenerate_emitters > 0 {
+        warnings.push(format!("{degenerate_emitters} emissive triangles have zero area and do not emit"));
+    }
     lights.shrink_to_fit();
-    stats.light_bytes = lights.capacity() * std::mem::size_of::<Light>();
-    stats.build_time = start.elapsed();
+    stats.record(&desc, &geometry, &lights, start);
     Ok(Scene {
         source: desc.source.clone(),
         camera,
@@ -253,6 +193,37 @@ pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
         warnings,
         inputs: desc.inputs.clone(),
     })
+}
+
+/// The centre and radius of a sphere around every triangle and positioned light (a unit
+/// sphere at the origin for an empty scene).
+fn bounds(geometry: &Geometry, lights: &[Light]) -> (Vec3A, f32) {
+    let (mut lo, mut hi) = (Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN));
+    for (v, _) in geometry.world_triangles() {
+        for p in v {
+            (lo, hi) = (lo.min(p), hi.max(p));
+        }
+    }
+    for l in lights {
+        if let Light::Point(PointLight { position, .. }) | Light::Spot(SpotLight { position, .. }) = l {
+            (lo, hi) = (lo.min(*position), hi.max(*position));
+        }
+    }
+    if lo.x <= hi.x { (0.5 * (lo + hi), (0.5 * (hi - lo).length()).max(1e-3)) } else { (Vec3A::ZERO, 1.0) }
+}
+
+impl SceneStats {
+    /// Counts, sizes and the build time of a scene built from `desc` since `start`.
+    fn record(&mut self, desc: &SceneDescription, geometry: &Geometry, lights: &[Light], start: Instant) {
+        self.meshes = desc.meshes.len();
+        self.cameras = desc.cameras.iter().map(|c| c.name.clone()).collect();
+        self.triangles = geometry.triangle_count();
+        self.stored_triangles = geometry.stored_triangle_count();
+        self.bvh_build_time = geometry.accel.stats().build_time;
+        self.geometry_bytes = geometry.memory_bytes();
+        self.light_bytes = std::mem::size_of_val(lights);
+        self.build_time = start.elapsed();
+    }
 }
 
 /// The `--camera` value that frames the whole scene instead of using one of its cameras.

@@ -1,5 +1,6 @@
-//! Meshes into the world: shared meshes stored once and instanced, the rest flattened into
-//! world space with their emissive triangles made lights.
+//! Meshes and listed lights into the world: shared meshes stored once and instanced, the
+//! rest flattened into world space with their emissive triangles made lights; quad lights,
+//! from a mesh or a list, are one light and the two triangles rays hit.
 
 use std::sync::Arc;
 
@@ -8,25 +9,93 @@ use crate::error::{Error, Result};
 use crate::geometry::{Attributes, GeometryBuilder, NO_LIGHT};
 use crate::light::{AreaEmission, Light, QuadLight, TriangleLight};
 use crate::limits::{MAX_COORDINATE, MAX_POWER};
-use crate::material::Image;
-use crate::math::{Mat3, Mat4, Vec3A};
+use crate::material::{Image, Material};
+use crate::math::{Mat3, Mat4, Rgb, Vec3A};
 use crate::scene::SceneStats;
 use crate::scene::description::{MeshDesc, SceneDescription};
 
 /// One placement of a mesh: its transform and the instance's name (for messages).
 pub(super) type Placement<'a> = (Mat4, &'a str);
 
-/// What placing meshes builds up.
+/// What placing meshes and lights builds up.
 pub(super) struct Placer<'a> {
     pub desc: &'a SceneDescription,
     pub images: &'a Arc<Vec<Image>>,
     pub geo: GeometryBuilder,
     pub lights: Vec<Light>,
+    /// The description's materials, and the black one listed quad lights show.
+    pub materials: Vec<Material>,
+    emitter_material: Option<u32>,
     pub stats: SceneStats,
     pub degenerate_emitters: usize,
 }
 
-impl Placer<'_> {
+impl<'a> Placer<'a> {
+    pub fn new(desc: &'a SceneDescription, images: &'a Arc<Vec<Image>>) -> Self {
+        Self {
+            desc,
+            images,
+            geo: GeometryBuilder::new(),
+            lights: Vec::new(),
+            materials: desc.materials.clone(),
+            emitter_material: None,
+            stats: SceneStats::default(),
+            degenerate_emitters: 0,
+        }
+    }
+
+    /// Places every mesh as `placements` says (shared, or flattened once per placement).
+    pub fn place_meshes(&mut self, placements: &[(Vec<Placement>, bool)]) -> Result<()> {
+        for (mesh, (p, shared)) in self.desc.meshes.iter().zip(placements) {
+            if *shared {
+                self.place_shared(mesh, p)?;
+            } else {
+                for &placement in p {
+                    self.place_flat(mesh, placement)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Adds the lights the description lists, checked; a quad light also shows as two
+    /// triangles with a black material, so camera and BSDF rays can hit it.
+    pub fn place_lights(&mut self) -> Result<()> {
+        for (i, l) in self.desc.lights.iter().enumerate() {
+            let light = super::lights::light(&self.desc.source, i, l)?;
+            if let Light::Quad(q) = &light {
+                let material = self.emitter_material();
+                let id = self.lights.len() as u32;
+                self.push_quad(id, q.triangles().map(|t| (t, [0, 1, 2])), None, material, false);
+            }
+            self.lights.push(light);
+        }
+        Ok(())
+    }
+
+    fn emitter_material(&mut self) -> u32 {
+        *self.emitter_material.get_or_insert_with(|| {
+            self.materials.push(Material { name: "<light>".into(), ..Material::diffuse("", Rgb::ZERO) });
+            (self.materials.len() - 1) as u32
+        })
+    }
+
+    /// The two triangles of quad light `light` (corners, and the vertex indices `attr` is
+    /// addressed by).
+    fn push_quad(
+        &mut self,
+        light: u32,
+        triangles: [([Vec3A; 3], [u32; 3]); 2],
+        attr: Option<Attributes>,
+        material: u32,
+        masked: bool,
+    ) {
+        for (corners, indices) in triangles {
+            self.geo.push_triangle(corners, indices, attr, material, light, masked);
+        }
+        self.stats.emissive_triangles += 2;
+    }
+
     fn err(&self, mesh: &MeshDesc, instance: &str, message: String) -> Error {
         Error::scene(&self.desc.source, format!("instance '{instance}' of mesh '{}'", mesh.name), message)
     }
@@ -62,7 +131,7 @@ impl Placer<'_> {
     }
 
     /// Adds a shared mesh once, in object space, and each of its placements.
-    pub fn place_shared(&mut self, mesh: &MeshDesc, placements: &[Placement]) -> Result<()> {
+    fn place_shared(&mut self, mesh: &MeshDesc, placements: &[Placement]) -> Result<()> {
         // Each placement's box corners bound where its vertices land.
         let (lo, hi) = mesh
             .positions
@@ -86,7 +155,7 @@ impl Placer<'_> {
 
     /// Adds every triangle of one placement to the flattened block, creating lights for
     /// emissive ones.
-    pub fn place_flat(&mut self, mesh: &MeshDesc, (m, name): Placement) -> Result<()> {
+    fn place_flat(&mut self, mesh: &MeshDesc, (m, name): Placement) -> Result<()> {
         let material = &self.desc.materials[mesh.material as usize];
         // A mirroring transform reverses the winding; swap two corners to keep the front
         // side (glTF: the front of a negative-determinant node is its clockwise side).
@@ -105,16 +174,18 @@ impl Placer<'_> {
                 let [a, b, _] = pair[0].map(|i| positions[i as usize]);
                 let d = positions[pair[1][2] as usize];
                 let (e1, e2) = if flip { (d - a, b - a) } else { (b - a, d - a) };
-                let id = match QuadLight::new(a, e1, e2, emission) {
-                    Some(q) => self.add_light(mesh, name, Light::Quad(q), 2)?,
+                let triangles = [pair[0], pair[1]].map(|t| (corners(t).map(|i| positions[i as usize]), corners(t)));
+                match QuadLight::new(a, e1, e2, emission) {
+                    Some(q) => {
+                        let id = self.add_light(mesh, name, Light::Quad(q))?;
+                        self.push_quad(id, triangles, attr, mesh.material, masked);
+                    }
                     None => {
                         self.degenerate_emitters += 2;
-                        NO_LIGHT
+                        for (corners, indices) in triangles {
+                            self.geo.push_triangle(corners, indices, attr, mesh.material, NO_LIGHT, masked);
+                        }
                     }
-                };
-                for &t in pair {
-                    let t = corners(t);
-                    self.geo.push_triangle(t.map(|i| positions[i as usize]), t, attr, mesh.material, id, masked);
                 }
             }
             return Ok(());
@@ -130,7 +201,10 @@ impl Placer<'_> {
                     }
                 });
                 match light {
-                    Some(l) => id = self.add_light(mesh, name, Light::Triangle(l), 1)?,
+                    Some(l) => {
+                        id = self.add_light(mesh, name, Light::Triangle(l))?;
+                        self.stats.emissive_triangles += 1;
+                    }
                     None => self.degenerate_emitters += 1,
                 }
             }
@@ -139,9 +213,9 @@ impl Placer<'_> {
         Ok(())
     }
 
-    /// Adds an emitter of `triangles` triangles; an error when its power is beyond what the
-    /// samplers' arithmetic holds.
-    fn add_light(&mut self, mesh: &MeshDesc, instance: &str, light: Light, triangles: usize) -> Result<u32> {
+    /// Adds an emitter of `mesh`; an error when its power is beyond what the samplers'
+    /// arithmetic holds.
+    fn add_light(&mut self, mesh: &MeshDesc, instance: &str, light: Light) -> Result<u32> {
         let power = light.power(0.0);
         if !(power <= MAX_POWER) {
             let material = &self.desc.materials[mesh.material as usize];
@@ -155,7 +229,6 @@ impl Placer<'_> {
             ));
         }
         self.lights.push(light);
-        self.stats.emissive_triangles += triangles;
         Ok((self.lights.len() - 1) as u32)
     }
 }
