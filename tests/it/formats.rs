@@ -9,6 +9,7 @@ use myriad::scene::{AUTO_CAMERA, Scene};
 use myriad::settings::LightSamplerKind;
 use serde_json::json;
 use std::collections::BTreeMap;
+use std::path::Path;
 
 fn light_kinds(scene: &Scene) -> BTreeMap<&'static str, usize> {
     let mut kinds = BTreeMap::new();
@@ -324,8 +325,8 @@ fn alpha_blend_lets_rays_through_as_often_as_it_is_transparent() {
 /// The Cycles reference of `name` averaged over `k × k` blocks (exactly what a box-filtered
 /// render at 1/k of its resolution sees), with the variance of each block's mean estimated
 /// from the spread of its pixels (which overstates it where the picture itself varies).
-fn cycles_downsampled(name: &str, k: u32) -> (UVec2, Vec<(Rgb, Rgb)>) {
-    let (layers, _) = myriad::io::exr::read(&blender(&format!("refs/{name}.cycles.exr"))).unwrap();
+fn cycles_downsampled(reference: &Path, k: u32) -> (UVec2, Vec<(Rgb, Rgb)>) {
+    let (layers, _) = myriad::io::exr::read(reference).unwrap();
     let rgb = layers.rgb().unwrap();
     let size = layers.size / k;
     let (mut sum, mut sum_sq) =
@@ -343,16 +344,17 @@ fn cycles_downsampled(name: &str, k: u32) -> (UVec2, Vec<(Rgb, Rgb)>) {
     (size, blocks)
 }
 
-/// Renders Blender export `name` at a quarter of its Cycles reference's resolution with `spp`
-/// and checks them pixel by pixel and over 4 × 4-pixel regions: z = (ours − Cycles) over the
+/// Renders the Blender export `glb` at a quarter of the resolution of its Cycles render
+/// `reference` with `spp` and checks them pixel by pixel and over 4 × 4-pixel regions: z = (ours − Cycles) over the
 /// two standard errors combined, per channel. Stratified samples converge faster than the
 /// i.i.d. error the film's variance estimates, and the reference's is overstated where the
 /// picture varies, so without bias the mean z² is at most about 1; bias adds to it, the more
 /// over a region, where it accumulates while the noise averages out (fireflies, which make
 /// single pixels stray, average out too).
-fn agrees_with_cycles_pixel_by_pixel(name: &str, spp: u32) {
-    let (size, cycles) = cycles_downsampled(name, 4);
-    let scene = load(&blender(&format!("{name}.glb")), Some(size), None).unwrap();
+fn agrees_with_cycles_pixel_by_pixel(glb: &Path, reference: &Path, spp: u32) {
+    let name = glb.file_stem().unwrap().to_string_lossy();
+    let (size, cycles) = cycles_downsampled(reference, 4);
+    let scene = load(glb, Some(size), None).unwrap();
     let film = render_with(&scene, LightSamplerKind::Tree, spp, 9, 5);
     let z = |pixels: &[usize], c: usize| {
         let (d, v) = pixels.iter().fold((0.0f64, 0.0f64), |(d, v), &i| {
@@ -379,6 +381,7 @@ fn agrees_with_cycles_pixel_by_pixel(name: &str, spp: u32) {
     let (pixel_z2, _, n) = mean_z2(&pixels);
     assert!(pixel_z2 < bound(n), "{name}: mean z² = {pixel_z2} over {n} pixel channels");
     let (region_z2, worst, n) = mean_z2(&regions);
+    eprintln!("{name}: mean z² {pixel_z2:.2} over pixels, {region_z2:.2} over regions, worst region {worst:.1}");
     assert!(region_z2 < bound(n), "{name}: mean z² = {region_z2} over {n} region channels");
     assert!(worst < 6.0, "{name}: a region is {worst} standard errors from Cycles");
 }
@@ -386,11 +389,21 @@ fn agrees_with_cycles_pixel_by_pixel(name: &str, spp: u32) {
 #[test]
 fn punctual_lights_agree_with_cycles_pixel_by_pixel() {
     // A point, a spot with Blender's blend and a sun.
-    agrees_with_cycles_pixel_by_pixel("punctual", 256);
+    agrees_with_cycles_pixel_by_pixel(&blender("punctual.glb"), &blender("refs/punctual.cycles.exr"), 256);
 }
 
 #[test]
 fn principled_materials_agree_with_cycles_pixel_by_pixel() {
     // Metals, plastics, a glossy floor and a coated paint under a point, a spot and a panel.
-    agrees_with_cycles_pixel_by_pixel("materials", 512);
+    agrees_with_cycles_pixel_by_pixel(&blender("materials.glb"), &blender("refs/materials.cycles.exr"), 512);
+}
+
+#[test]
+fn one_factor_blender_scenes_agree_with_cycles_pixel_by_pixel() {
+    // tests/data/blender/factors: one material (or the spot) on a sphere, each against its
+    // Cycles render (tools/make_blender_factors.py makes both).
+    for name in ["metal", "plastic", "specular", "coat", "glass_smooth", "glass_rough", "alpha_blend", "spot"] {
+        let (glb, reference) = (blender(&format!("factors/{name}.glb")), blender(&format!("factors/{name}.cycles.exr")));
+        agrees_with_cycles_pixel_by_pixel(&glb, &reference, 256);
+    }
 }
