@@ -249,3 +249,37 @@ fn an_exr_with_a_broken_header_is_an_error_not_an_allocation() {
         }
     }
 }
+
+#[test]
+fn impossible_material_values_are_errors_or_warnings_naming_the_material() {
+    let material = |extensions: serde_json::Value| {
+        move |d: &mut serde_json::Value| {
+            d["materials"][0]["extensions"] = extensions;
+            d["extensionsUsed"] = json!(["KHR_materials_ior", "KHR_materials_transmission", "KHR_materials_volume"]);
+        }
+    };
+    let e = gltf_error(material(json!({"KHR_materials_ior": {"ior": 0.5}})));
+    assert_mentions(&e, &["broken.gltf", "material", "IOR must be a finite number above 1, not 0.5"]);
+    let e = gltf_error(material(json!({"KHR_materials_transmission": {"transmissionFactor": 2.0}})));
+    assert_mentions(&e, &["broken.gltf", "material", "transmission"]);
+    // A negative attenuation distance: the glass renders, without absorption, and says so.
+    low_memory_limit();
+    let dir = tempfile::tempdir().unwrap();
+    let mut doc = cornell_json();
+    material(json!({"KHR_materials_transmission": {"transmissionFactor": 1.0},
+                    "KHR_materials_volume": {"thicknessFactor": 1, "attenuationDistance": -1}}))(&mut doc);
+    let path = dir.path().join("glass.gltf");
+    std::fs::write(&path, doc.to_string()).unwrap();
+    let scene = load(&path, Some(UVec2::new(8, 6)), None).unwrap();
+    let name = &scene.materials[0].name;
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains(&format!("material '{name}'")) && w.contains("attenuationDistance -1")),
+        "{:?}",
+        scene.warnings
+    );
+    let film = crate::render::render_with(&scene, myriad::settings::LightSamplerKind::Tree, 4, 4, 1);
+    assert!(film.means().iter().all(|p| p.is_finite()));
+}

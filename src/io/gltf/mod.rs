@@ -221,11 +221,19 @@ impl Loader<'_> {
     /// The absorption coefficient of a material's volume, when it has one (a thickness > 0):
     /// −ln(colour)/distance as the specification has it, or, for files Blender wrote, what
     /// Cycles' Volume Absorption node (colour, density 1/distance) gives: (1 − colour)/distance.
-    /// A solid without absorption is `Some(0)`.
-    fn volume(&self, m: &gltf::Material) -> Option<Rgb> {
+    /// A solid without absorption is `Some(0)`; so is one whose distance is not positive,
+    /// with a warning naming `material`.
+    fn volume(&mut self, m: &gltf::Material, material: &str) -> Option<Rgb> {
         let v = m.volume().filter(|v| v.thickness_factor() > 0.0)?;
         let (color, distance) = (Rgb::from(v.attenuation_color()), v.attenuation_distance());
-        if !(distance > 0.0) || distance.is_infinite() {
+        if distance.is_infinite() && distance > 0.0 {
+            return Some(Rgb::ZERO);
+        }
+        if !(distance > 0.0) {
+            self.warn(format!(
+                "material '{material}': KHR_materials_volume attenuationDistance {distance} is not positive; \
+                 the volume absorbs nothing"
+            ));
             return Some(Rgb::ZERO);
         }
         let per_channel = |c: f32| if self.blender { (1.0 - c).max(0.0) } else { -(c.clamp(1e-6, 1.0)).ln() };
@@ -252,7 +260,7 @@ impl Loader<'_> {
                     factor("clearcoatRoughnessFactor").unwrap_or(if textured { 0.0 } else { default_roughness });
                 (factor("clearcoatFactor").unwrap_or(0.0), roughness)
             });
-            let volume = self.volume(&m);
+            let volume = self.volume(&m, &name);
             let alpha = match m.alpha_mode() {
                 gltf::material::AlphaMode::Mask => AlphaMode::Mask(m.alpha_cutoff().unwrap_or(0.5)),
                 gltf::material::AlphaMode::Blend => AlphaMode::Blend,
