@@ -3,7 +3,7 @@
 //! Owns: the camera model shared by every loader (RON look-at, glTF node matrix). The image
 //! plane follows glTF: the camera looks down its local −Z with +Y up, `yfov` is the vertical
 //! field of view, and the horizontal extent follows the output aspect ratio (so `yfov` is kept
-//! when the ratio changes, as conventions.md asks). Pixel (0,0) is the top-left corner; the
+//! when the ratio changes; docs/conventions.md). Pixel (0,0) is the top-left corner; the
 //! pixel filter is a 1-pixel box, as in the Cycles references.
 
 use crate::geometry::Ray;
@@ -88,16 +88,6 @@ impl Camera {
     /// Image size in pixels.
     pub fn resolution(&self) -> UVec2 {
         self.resolution
-    }
-
-    /// Position of the pinhole.
-    pub fn origin(&self) -> Vec3A {
-        self.origin
-    }
-
-    /// Unit viewing direction.
-    pub fn forward(&self) -> Vec3A {
-        self.forward
     }
 
     /// The primary ray through `pixel` at sub-pixel offset `jitter ∈ [0,1)²` (unit direction).

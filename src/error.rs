@@ -8,7 +8,7 @@ pub enum Error {
     /// A file could not be read or written.
     #[error("{}: {source}", path.display())]
     Io {
-        /// The file.
+        /// The file (or folder) the operation was on.
         path: PathBuf,
         /// The operating system's reason.
         #[source]
@@ -36,7 +36,7 @@ pub enum Error {
     /// An input file (image, reference) is unreadable or unsuitable.
     #[error("{}: {message}", path.display())]
     Input {
-        /// The file.
+        /// The input file that was refused.
         path: PathBuf,
         /// Why.
         message: String,

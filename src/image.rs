@@ -11,7 +11,7 @@ use crate::math::{Rgb, UVec2};
 pub struct Channel {
     /// EXR channel name (`R`, `albedo.G`, `variance.B`, `Z`…).
     pub name: String,
-    /// Values.
+    /// One value per pixel, `size.x × size.y` of them.
     pub data: Vec<f32>,
 }
 
@@ -20,7 +20,7 @@ pub struct Channel {
 pub struct Layers {
     /// Width and height.
     pub size: UVec2,
-    /// Channels.
+    /// Channels in file order, each of `size`.
     pub channels: Vec<Channel>,
 }
 

@@ -19,7 +19,7 @@ use crate::error::Result;
 use crate::io::LoadOptions;
 use crate::scene::{self, BuildOptions, Scene, SceneDescription};
 
-/// The scene built into the binary: the seed's Cornell box with a 5 × 5 ceiling grid.
+/// The scene built into the binary: the predecessor project's Cornell box with a 5 × 5 ceiling grid.
 pub const DEFAULT_SCENE: &str = include_str!("../../scenes/cornell-5x5.ron");
 
 /// Name under which [`DEFAULT_SCENE`] appears in messages and file headers.

@@ -1,4 +1,4 @@
-//! Error metrics between an image and a reference (conventions.md): MSE, relMSE,
+//! Error metrics between an image and a reference (docs/conventions.md): MSE, relMSE,
 //! efficiency, per-pixel relative error, and the bias check. Pure functions; no rendering.
 
 use crate::error::{Error, Result};

@@ -7,7 +7,7 @@ use super::metrics::{BIAS_ALPHA, BiasCheck, REL_MSE_EPSILON};
 /// Mean and standard deviation of a quantity over seeds.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct Stat {
-    /// Mean.
+    /// Mean over seeds.
     pub mean: f64,
     /// Sample standard deviation (0 for one seed).
     pub std: f64,
@@ -26,7 +26,7 @@ impl Stat {
 /// One render of one sampler with one seed.
 #[derive(Clone, Debug, Serialize)]
 pub struct RunResult {
-    /// Seed.
+    /// The seed the run rendered with.
     pub seed: u64,
     /// Render seconds (scene loading and sampler build excluded).
     pub seconds: f64,

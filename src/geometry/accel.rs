@@ -4,8 +4,8 @@
 //! Owns: one [`Blas`] per geometry block (the flattened world-space triangles, and each mesh
 //! that several instances share, in object space), [`Instance`] placements, a top-level
 //! CWBVH over the instances when there is more than one, closest-hit and occlusion queries
-//! with an acceptance test (alpha cut-outs). Medium build preset: PLOC + reinsertion,
-//! crates.md measured it as the best build/trace trade-off here. This is the only file that
+//! with an acceptance test (alpha cut-outs). Medium build preset: PLOC + reinsertion, the
+//! best build/trace trade-off measured here (docs/conventions.md). This is the only file that
 //! imports obvhs.
 //!
 //! A BLAS stores its triangles in BVH order ("direct layout"), so the slot obvhs hands to the
@@ -30,7 +30,7 @@ use crate::math::{Mat3, Mat4, Vec3A};
 /// The raw result of a closest-hit query.
 #[derive(Clone, Copy, Debug)]
 pub struct RawHit {
-    /// Instance hit.
+    /// Index of the instance hit.
     pub instance: u32,
     /// Triangle within the instance's BLAS (BVH order).
     pub tri: u32,
@@ -113,10 +113,6 @@ impl Blas {
         [t.v0, t.v1, t.v2]
     }
 
-    fn nodes(&self) -> usize {
-        self.bvh.as_ref().map_or(0, |b| b.nodes.len())
-    }
-
     fn memory_bytes(&self) -> usize {
         self.bvh
             .as_ref()
@@ -158,7 +154,7 @@ impl Blas {
 /// A placement of a BLAS in the world.
 #[derive(Clone, Copy, Debug)]
 pub struct Instance {
-    /// The BLAS.
+    /// Index of the BLAS it places.
     pub blas: u32,
     /// Object → world.
     pub to_world: Mat4,
@@ -184,8 +180,6 @@ impl Boundable for Instance {
 pub struct AccelStats {
     /// Wall time of all builds.
     pub build_time: Duration,
-    /// BVH nodes, all levels.
-    pub nodes: usize,
     /// Bytes of nodes, triangles and index tables.
     pub memory_bytes: usize,
 }
@@ -237,11 +231,10 @@ impl Accel {
             Some(t) => t.primitive_indices.iter().map(|&i| instances[i as usize]).collect(),
             None => instances,
         };
-        let nodes = blases.iter().map(Blas::nodes).sum::<usize>() + tlas.as_ref().map_or(0, |t| t.nodes.len());
         let memory_bytes = blases.iter().map(Blas::memory_bytes).sum::<usize>()
             + instances.len() * std::mem::size_of::<Instance>()
             + tlas.as_ref().map_or(0, |t| t.nodes.len() * std::mem::size_of_val(&t.nodes[0]));
-        let stats = AccelStats { build_time: build_time + start.elapsed(), nodes, memory_bytes };
+        let stats = AccelStats { build_time: build_time + start.elapsed(), memory_bytes };
         Self { blases, instances, tlas, stats }
     }
 
@@ -250,12 +243,12 @@ impl Accel {
         self.stats
     }
 
-    /// The instances.
+    /// Every placement, in TLAS order (the slot a hit reports).
     pub fn instances(&self) -> &[Instance] {
         &self.instances
     }
 
-    /// The BLASes.
+    /// One BLAS per geometry block; block 0 holds the flattened world-space triangles.
     pub fn blases(&self) -> &[Blas] {
         &self.blases
     }

@@ -25,11 +25,3 @@ pub struct SurfaceHit {
     /// Light index when the triangle emits.
     pub light: Option<u32>,
 }
-
-impl SurfaceHit {
-    /// True when a ray travelling along `dir` arrives on the front (counter-clockwise) side.
-    #[inline]
-    pub fn is_front_facing(&self, dir: Vec3A) -> bool {
-        self.n_geom.dot(dir) < 0.0
-    }
-}

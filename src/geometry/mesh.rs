@@ -65,11 +65,6 @@ impl GeometryBuilder {
         Self { blocks: vec![Block::default()], placements: vec![(0, Mat4::IDENTITY)], ..Default::default() }
     }
 
-    /// Triangles in the flattened block so far: the index the next one gets before reordering.
-    pub fn flat_len(&self) -> usize {
-        self.blocks[0].tris.len()
-    }
-
     /// Appends per-vertex normals and UVs (either may be absent; absent UVs read as zero) and
     /// returns the index of the first, for [`Attributes::base`].
     pub fn push_vertices(&mut self, normals: Option<&[Vec3A]>, uvs: Option<&[Vec2]>, count: usize) -> u32 {
@@ -136,25 +131,18 @@ impl GeometryBuilder {
         self.placements.push((block, transform));
     }
 
-    /// Builds every BVH. Returns the geometry and, for the flattened block, `new_index[old]`.
-    pub fn build(self) -> (Geometry, Vec<u32>) {
+    /// Builds every BVH (triangles are reordered into BVH order; lights keep their ids).
+    pub fn build(self) -> Geometry {
         let start = Instant::now();
         let mut blases = Vec::with_capacity(self.blocks.len());
         let mut infos = Vec::with_capacity(self.blocks.len());
-        let mut flat_index = Vec::new();
-        for (k, block) in self.blocks.into_iter().enumerate() {
+        for block in self.blocks {
             let (blas, order) = Blas::build(block.tris);
             infos.push(order.iter().map(|&old| block.info[old as usize]).collect::<Vec<_>>());
-            if k == 0 {
-                flat_index = vec![0u32; order.len()];
-                for (new, &old) in order.iter().enumerate() {
-                    flat_index[old as usize] = new as u32;
-                }
-            }
             blases.push(blas);
         }
         let accel = Accel::new(blases, &self.placements, start.elapsed());
-        (Geometry { accel, info: infos, normals: self.normals, uvs: self.uvs }, flat_index)
+        Geometry { accel, info: infos, normals: self.normals, uvs: self.uvs }
     }
 }
 
@@ -314,7 +302,7 @@ mod tests {
             let m = Mat4::from_translation(glam::Vec3::new(0.0, 0.0, -(k as f32) - 1.0)) * Mat4::from_rotation_y(0.3);
             g.add_instance(block, m);
         }
-        let (geo, _) = g.build();
+        let geo = g.build();
         assert_eq!(geo.stored_triangle_count(), 2);
         assert_eq!(geo.triangle_count(), 200);
         let hit = geo.intersect(&Ray::new(Vec3A::new(0.1, 0.2, 0.0), -Vec3A::Z), f32::INFINITY, |_, _| false).unwrap();

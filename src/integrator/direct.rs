@@ -39,7 +39,7 @@ fn light_contribution(
     u: [u64; 2],
     counters: &mut RayCounters,
 ) -> Rgb {
-    let Some(ls) = light.sample_li(p, u) else { return Rgb::ZERO };
+    let Some(ls) = light.sample_li(p, u, &scene.images) else { return Rgb::ZERO };
     let f = sp.eval_cos(wo, ls.wi);
     if f == Rgb::ZERO || !(ls.pdf > 0.0) {
         return Rgb::ZERO;
@@ -58,7 +58,7 @@ fn light_contribution(
     let weight = if light.is_delta() { 1.0 } else { power_heuristic(pmf * ls.pdf, sp.pdf(wo, ls.wi)) };
     // Only a light on this side of the surface is reached through the volume the point is in;
     // towards the far side the ray leaves it at once.
-    let inside = medium != Rgb::ZERO && ls.wi.dot(sp.ng) > 0.0;
+    let inside = medium != Rgb::ZERO && ls.wi.dot(sp.n_geom) > 0.0;
     let through = if inside { super::path::transmittance(medium, ls.distance) } else { Rgb::ONE };
     f * ls.radiance * through * (weight / (pmf * ls.pdf))
 }

@@ -101,7 +101,7 @@ pub fn radiance(
 
         if let Some(id) = hit.light {
             let light = &scene.lights[id as usize];
-            let le = light.emitted(hit.n_geom, ray.dir, hit.uv);
+            let le = light.emitted(hit.n_geom, ray.dir, hit.uv, &scene.images);
             if le != Rgb::ZERO {
                 let weight = match prev {
                     None => 1.0,
@@ -131,7 +131,7 @@ pub fn radiance(
         beta *= bs.weight;
         // Refracting into a solid glass object puts the ray in its volume; out of one, back
         // outside (objects are not nested).
-        if bs.wi.dot(sp.ng) < 0.0 && !material.thin {
+        if bs.wi.dot(sp.n_geom) < 0.0 && !material.thin {
             let entering = ray.dir.dot(hit.n_geom) < 0.0;
             medium = if entering { material.absorption } else { Rgb::ZERO };
         }

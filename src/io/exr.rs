@@ -1,8 +1,8 @@
 //! OpenEXR output and input, through the `exr` crate.
 //!
 //! Writes one single-part, scan-line, ZIP16-compressed file whose channels are f32 (the
-//! layout every compositor reads; crates.md checked it against the reference OpenEXR
-//! library), with provenance as text attributes (`myriad.sampler`, `myriad.spp`, …). Reads
+//! layout every compositor reads, checked against the reference OpenEXR library;
+//! docs/conventions.md), with provenance as text attributes (`myriad.sampler`, `myriad.spp`, …). Reads
 //! any flat EXR back as named f32 channels, for references and `diff`.
 
 use std::path::Path;

@@ -106,11 +106,6 @@ pub fn ensure_dir(dir: &Path) -> Result<()> {
         .map_err(|e| Error::Output { path: dir.into(), message: format!("cannot create the folder: {e}") })
 }
 
-/// The bytes of a file (for cache keys).
-pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
-    std::fs::read(path).map_err(|e| Error::io(path, e))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -2,8 +2,7 @@
 //! where, and its importance at a shading point.
 //!
 //! Conty Estevez & Kulla 2018 ("Importance Sampling of Many Lights with Adaptive Tree
-//! Splitting"), as pbrt-v4 `LightBounds` writes it, with the fixes of
-//! `../shared/design/many-lights.md` b.5:
+//! Splitting"), as pbrt-v4 `LightBounds` writes it, with four changes:
 //! - the distance is clamped with a *squared* length, `d² ≥ (r/2)²` (pbrt clamps d² with an
 //!   unsquared length, which depends on the scene's scale);
 //! - the angle a cluster subtends is bounded by its bounding *sphere* (box corners under-
@@ -13,9 +12,12 @@
 //! - directional lights are "infinite" bounds: a cone of directions towards the lights and an
 //!   irradiance bound, compared with local clusters in the same units (W/m²).
 //!
-//! `phi` is the peak radiant intensity (W/sr) over RGB channels, not power: then φ·cos/d² is
-//! an irradiance bound comparable across light types (a point light of intensity I and a quad
-//! of radiance L and area A with L·A = I rank alike). It is never 0 for a light that emits.
+//! `phi` is a radiant intensity (W/sr, the largest RGB channel), not power: then φ·cos/d² is
+//! an irradiance comparable across light types (a point light of intensity I and a quad of
+//! radiance L and area A with L·A = I rank alike). For uniform emitters it is the peak
+//! intensity, a bound; a textured triangle uses its texture's mean radiance over the triangle
+//! (an average, not a bound: the texture's bright texels are not found by the tree). It is
+//! never 0 for a light that emits.
 
 use super::Light;
 use crate::math::{Vec3A, Vec4, safe_acos, safe_sqrt};
@@ -29,7 +31,8 @@ pub struct LightBounds {
     pub min: Vec3A,
     /// Box maximum.
     pub max: Vec3A,
-    /// Peak radiant intensity bound (W/sr), or irradiance bound (W/m²) for infinite bounds.
+    /// Radiant intensity (W/sr; see the module docs), or irradiance bound (W/m²) for
+    /// infinite bounds.
     pub phi: f32,
     /// Axis of the normal cone (for infinite bounds: direction *towards* the lights).
     pub w: Vec3A,
@@ -48,11 +51,11 @@ pub struct LightBounds {
 /// have `phi = 0` and importance 0.
 #[derive(Clone, Copy, Debug)]
 pub struct BoundsPacket {
-    /// Bounding-sphere centres.
+    /// Bounding-sphere centres of the four lanes, as x, y and z components.
     pub cx: Vec4,
-    /// Centre y.
+    #[allow(missing_docs)]
     pub cy: Vec4,
-    /// Centre z.
+    #[allow(missing_docs)]
     pub cz: Vec4,
     /// Squared bounding-sphere radii.
     pub r2: Vec4,
@@ -145,7 +148,7 @@ impl BoundsPacket {
     pub fn importance(&self, p: Vec3A, n: Vec3A) -> Vec4 {
         let (dx, dy, dz) = (Vec4::splat(p.x) - self.cx, Vec4::splat(p.y) - self.cy, Vec4::splat(p.z) - self.cz);
         let dist2 = dx * dx + dy * dy + dz * dz;
-        // [fix] squared-length clamp: a receiver inside the cluster sees it at ≥ r/2.
+        // Squared-length clamp (change 1 above): a receiver inside the cluster sees it at ≥ r/2.
         // (and 1e-12 m² keeps a receiver exactly at a point light finite).
         let d2 = dist2.max(0.25 * self.r2).max(Vec4::splat(1e-12));
         let inv_dist = Vec4::select(dist2.cmpgt(Vec4::ZERO), sqrt4(dist2).recip(), Vec4::ZERO);
@@ -167,7 +170,7 @@ impl BoundsPacket {
         let mut infinite = self.phi;
         if n != Vec3A::ZERO {
             let (nx, ny, nz) = (Vec4::splat(n.x), Vec4::splat(n.y), Vec4::splat(n.z));
-            // [fix] signed horizon test: θi' = max(0, θi − θb), zero when ≥ 90°.
+            // Signed horizon test (change 3 above): θi' = max(0, θi − θb), zero when ≥ 90°.
             let cos_i = -(nx * wix + ny * wiy + nz * wiz);
             let cos_ip = cos_sub_clamped4(cos_i, sin_from_cos4(cos_i), cos_b, sin_b);
             importance *= cos_ip.max(Vec4::ZERO);

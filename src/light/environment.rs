@@ -123,7 +123,7 @@ impl EnvironmentLight {
         let (wi, pdf) = match &self.map {
             None => {
                 let wi = warp::square_to_uniform_sphere(Vec2::new(unit_f32(u[0]), unit_f32(u[1])));
-                (wi, 1.0 / (4.0 * PI))
+                (wi, warp::UNIFORM_SPHERE_PDF)
             }
             Some(m) => {
                 let row = m.rows.sample(u[1]);
@@ -148,7 +148,7 @@ impl EnvironmentLight {
     #[inline]
     pub fn pdf(&self, dir: Vec3A) -> f32 {
         match &self.map {
-            None => 1.0 / (4.0 * PI),
+            None => warp::UNIFORM_SPHERE_PDF,
             Some(m) => {
                 let d = self.to_map(dir);
                 let (c, r) = m.texel(direction_to_uv(d));

@@ -2,7 +2,7 @@
 //! power.
 //!
 //! Owns: the closed set [`Light`] (one struct per kind, one file each) and [`LightSample`].
-//! Units (conventions.md): area lights carry radiance [W/(m²·sr)], point and spot lights
+//! Units (docs/conventions.md): area lights carry radiance [W/(m²·sr)], point and spot lights
 //! radiant intensity [W/sr], directional lights irradiance [W/m²]. Powers are in watts of
 //! luminance (Rec.709 Y), the scalar the `power` sampler compares. Depends on `math` and
 //! `sampling` (for the numbers that pick points).
@@ -25,6 +25,7 @@ pub use quad::QuadLight;
 pub use spot::{SpotCurve, SpotLight};
 pub use triangle::{EmissionTexture, TriangleLight};
 
+use crate::material::Image;
 use crate::math::{Rgb, Vec2, Vec3A};
 use crate::sampling::unit_f32;
 
@@ -69,15 +70,16 @@ pub enum Light {
 
 impl Light {
     /// Samples the light as seen from `p` with two 64-bit numbers (area lights take their
-    /// top 24 bits as floats in `[0,1)²`); `None` when it cannot reach `p`.
+    /// top 24 bits as floats in `[0,1)²`); `None` when it cannot reach `p`. Emission
+    /// textures read `images`, the scene's.
     #[inline]
-    pub fn sample_li(&self, p: Vec3A, u: [u64; 2]) -> Option<LightSample> {
+    pub fn sample_li(&self, p: Vec3A, u: [u64; 2], images: &[Image]) -> Option<LightSample> {
         let unit = || Vec2::new(unit_f32(u[0]), unit_f32(u[1]));
         match self {
             Light::Point(l) => l.sample_li(p),
             Light::Spot(l) => l.sample_li(p),
             Light::Distant(l) => l.sample_li(),
-            Light::Triangle(l) => l.sample_li(p, unit()),
+            Light::Triangle(l) => l.sample_li(p, unit(), images),
             Light::Quad(l) => l.sample_li(p, unit()),
             Light::Environment(l) => l.sample_li(u),
         }
@@ -96,12 +98,13 @@ impl Light {
     }
 
     /// Radiance leaving the surface at a ray hit, along `-dir` (`dir`: the ray's direction;
-    /// `n_geom`: the hit triangle's front normal; `uv`: texture coordinates at the hit).
+    /// `n_geom`: the hit triangle's front normal; `uv`: texture coordinates at the hit, in
+    /// the scene's `images`).
     #[inline]
-    pub fn emitted(&self, n_geom: Vec3A, dir: Vec3A, uv: Vec2) -> Rgb {
+    pub fn emitted(&self, n_geom: Vec3A, dir: Vec3A, uv: Vec2, images: &[Image]) -> Rgb {
         match self {
             Light::Point(_) | Light::Spot(_) | Light::Distant(_) | Light::Environment(_) => Rgb::ZERO,
-            Light::Triangle(l) => l.emitted(uv, -dir),
+            Light::Triangle(l) => l.emitted(uv, -dir, images),
             Light::Quad(l) => l.emission.radiance_towards(n_geom, -dir),
         }
     }

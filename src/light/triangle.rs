@@ -1,7 +1,5 @@
 //! Emissive triangle, sampled uniformly by area; optionally with an emission texture.
 
-use std::sync::Arc;
-
 use super::{AreaEmission, LightSample};
 use crate::material::{Image, TextureRef, texture::mean_over_triangle};
 use crate::math::warp::square_to_triangle;
@@ -14,8 +12,6 @@ pub struct EmissionTexture {
     pub texture: TextureRef,
     /// Texture coordinates of the three vertices.
     pub uv: [Vec2; 3],
-    /// The scene's images.
-    pub images: Arc<Vec<Image>>,
     /// Mean texture colour over the triangle (sRGB-decoded): sets power and bounds.
     pub mean: Rgb,
 }
@@ -49,19 +45,19 @@ impl TriangleLight {
         (area > 0.0 && area.is_finite()).then_some(Self { v, n, area, emission, texture: None })
     }
 
-    /// Adds an emission texture read at vertex coordinates `uv`.
-    pub fn with_texture(mut self, texture: TextureRef, uv: [Vec2; 3], images: Arc<Vec<Image>>) -> Self {
-        let mean = mean_over_triangle(&texture, &images, uv).max(Rgb::splat(MIN_TEXTURE_MEAN));
-        self.texture = Some(Box::new(EmissionTexture { texture, uv, images, mean }));
+    /// Adds an emission texture of `images` read at vertex coordinates `uv`.
+    pub fn with_texture(mut self, texture: TextureRef, uv: [Vec2; 3], images: &[Image]) -> Self {
+        let mean = mean_over_triangle(&texture, images, uv).max(Rgb::splat(MIN_TEXTURE_MEAN));
+        self.texture = Some(Box::new(EmissionTexture { texture, uv, mean }));
         self
     }
 
     /// Radiance factor at barycentrics (b1, b2) or, for a hit, at texture coordinates `uv`.
     #[inline]
-    fn radiance_at(&self, uv: impl FnOnce(&EmissionTexture) -> Vec2) -> Rgb {
+    fn radiance_at(&self, images: &[Image], uv: impl FnOnce(&EmissionTexture) -> Vec2) -> Rgb {
         match &self.texture {
             None => self.emission.radiance,
-            Some(t) => self.emission.radiance * Rgb::from(t.texture.sample_srgb(&t.images, uv(t)).truncate()),
+            Some(t) => self.emission.radiance * Rgb::from(t.texture.sample_srgb(images, uv(t)).truncate()),
         }
     }
 
@@ -70,20 +66,21 @@ impl TriangleLight {
         self.texture.as_ref().map_or(self.emission.radiance, |t| self.emission.radiance * t.mean)
     }
 
-    /// Radiance leaving the triangle at texture coordinates `uv` towards `w`.
+    /// Radiance leaving the triangle at texture coordinates `uv` towards `w` (a texture
+    /// reads `images`, the scene's).
     #[inline]
-    pub fn emitted(&self, uv: Vec2, w: Vec3A) -> Rgb {
-        let e = AreaEmission { radiance: self.radiance_at(|_| uv), ..self.emission };
+    pub fn emitted(&self, uv: Vec2, w: Vec3A, images: &[Image]) -> Rgb {
+        let e = AreaEmission { radiance: self.radiance_at(images, |_| uv), ..self.emission };
         e.radiance_towards(self.n, w)
     }
 
-    /// Uniform-area sample seen from `p`.
+    /// Uniform-area sample seen from `p` (a texture reads `images`).
     #[inline]
-    pub fn sample_li(&self, p: Vec3A, u: Vec2) -> Option<LightSample> {
+    pub fn sample_li(&self, p: Vec3A, u: Vec2, images: &[Image]) -> Option<LightSample> {
         let [b0, b1, b2] = square_to_triangle(u);
         let q = self.v[0] * b0 + self.v[1] * b1 + self.v[2] * b2;
         let e = AreaEmission {
-            radiance: self.radiance_at(|t| t.uv[0] * b0 + t.uv[1] * b1 + t.uv[2] * b2),
+            radiance: self.radiance_at(images, |t| t.uv[0] * b0 + t.uv[1] * b1 + t.uv[2] * b2),
             ..self.emission
         };
         e.sample_at(p, q, self.n, self.area)

@@ -1,4 +1,4 @@
-//! `local`: a CDF over every light's importance at the shading point, the seed's "weighted"
+//! `local`: a CDF over every light's importance at the shading point, the predecessor project's "weighted"
 //! sampler (its `lights_pdf` and `lights_cdf`) and pbrt-v4's `ExhaustiveLightSampler`.
 //!
 //! O(n) per shading point, and again for the pmf MIS needs at an emitter hit: the ideal the
@@ -70,7 +70,7 @@ impl LocalSampler {
         Self { packets: sorted.chunks(4).map(BoundsPacket::new).collect(), order, slot }
     }
 
-    /// Bytes held.
+    /// Bytes of the light table and the per-thread scratch it keeps.
     pub fn memory_bytes(&self) -> usize {
         self.packets.capacity() * std::mem::size_of::<BoundsPacket>()
             + (self.order.capacity() + self.slot.capacity()) * 4

@@ -36,7 +36,7 @@ pub struct ShadingContext {
 /// A chosen light and the probability it was chosen with.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SampledLight {
-    /// The light.
+    /// Index of the chosen light in the scene's list.
     pub light: LightId,
     /// Its probability (> 0).
     pub pmf: f32,

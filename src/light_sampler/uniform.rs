@@ -1,4 +1,4 @@
-//! Uniform light selection: pmf = 1/n, the seed's "uniform" sampler.
+//! Uniform light selection: pmf = 1/n, the predecessor project's "uniform" sampler.
 //!
 //! Light `i` owns the values `u` with ⌊u·n / 2⁶⁴⌋ = i, which is ⌈2⁶⁴/n⌉ or ⌊2⁶⁴/n⌋ of them:
 //! its pmf is that count / 2⁶⁴, within 2⁻³³ of 1/n for any n the samplers take.

@@ -2,7 +2,7 @@
 //!
 //! Owns: D, Smith Λ/G1/G2 (height-correlated), and visible-normal sampling (Heitz 2018,
 //! "Sampling the GGX Distribution of Visible Normals", JCGT 7(4)) with its density.
-//! `alpha = roughness²` as glTF and conventions.md define it.
+//! `alpha = roughness²` as glTF defines it (docs/conventions.md).
 
 use crate::math::{Vec2, Vec3A};
 use std::f32::consts::PI;

@@ -218,15 +218,6 @@ impl Material {
         }
     }
 
-    /// Emitted radiance at `uv`.
-    #[inline]
-    pub fn emission_at(&self, uv: Vec2, images: &[Image]) -> Rgb {
-        match &self.emission_texture {
-            Some(t) => self.emission * Rgb::from(t.sample_srgb(images, uv).truncate()),
-            None => self.emission,
-        }
-    }
-
     /// The shading normal with the normal map applied. `n`: interpolated normal, `dpdu`,
     /// `dpdv`: the triangle's position derivatives in texture space (zero without UVs).
     #[inline]
@@ -274,9 +265,9 @@ impl Material {
 pub struct ShadingPoint {
     /// Shading frame; `frame.n` is on the viewer's side.
     pub frame: Frame,
-    /// Geometric normal on the viewer's side.
-    pub ng: Vec3A,
-    /// The BSDF.
+    /// Geometric normal on the viewer's side (the hit's `n_geom`, face-forwarded).
+    pub n_geom: Vec3A,
+    /// The material's BSDF at this point (textures already looked up).
     pub bsdf: Bsdf,
     /// Whether light can pass through (then `wi` may lie on either side).
     transmits: bool,
@@ -286,9 +277,9 @@ impl ShadingPoint {
     /// Orients the normals towards `wo` (unit, pointing away from the surface).
     #[inline]
     pub fn new(bsdf: Bsdf, n_geom: Vec3A, n_shading: Vec3A, wo: Vec3A) -> Self {
-        let ng = if n_geom.dot(wo) < 0.0 { -n_geom } else { n_geom };
-        let ns = if n_shading.dot(ng) < 0.0 { -n_shading } else { n_shading };
-        Self { frame: Frame::from_normal(ns), ng, bsdf, transmits: bsdf.transmits() }
+        let n_geom = if n_geom.dot(wo) < 0.0 { -n_geom } else { n_geom };
+        let ns = if n_shading.dot(n_geom) < 0.0 { -n_shading } else { n_shading };
+        Self { frame: Frame::from_normal(ns), n_geom, bsdf, transmits: bsdf.transmits() }
     }
 
     /// True when world direction `wi` is on a side the surface can send light to, with the
@@ -296,7 +287,7 @@ impl ShadingPoint {
     /// normals never leak light through a surface).
     #[inline]
     fn allows(&self, wi: Vec3A, local: Vec3A) -> bool {
-        let above = wi.dot(self.ng) > 0.0;
+        let above = wi.dot(self.n_geom) > 0.0;
         (above || self.transmits) && above == (local.z > 0.0)
     }
 
@@ -331,7 +322,7 @@ impl ShadingPoint {
     /// Where a ray leaving `p` along `wi` starts: off the surface on `wi`'s side.
     #[inline]
     pub fn ray_origin(&self, p: Vec3A, wi: Vec3A) -> Vec3A {
-        crate::geometry::offset_ray_origin(p, if wi.dot(self.ng) >= 0.0 { self.ng } else { -self.ng })
+        crate::geometry::offset_ray_origin(p, if wi.dot(self.n_geom) >= 0.0 { self.n_geom } else { -self.n_geom })
     }
 
     /// The normal light selection weighs lights by (their horizon): none for surfaces that

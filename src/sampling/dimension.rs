@@ -5,7 +5,9 @@
 //! (`tree`) never shifts the numbers other decisions see, and two samplers compared at equal
 //! spp see the same camera rays and BSDF directions.
 
-/// A named random dimension within one bounce. 2D dimensions use two consecutive slots.
+/// A named random dimension within one bounce. Each is one seed of the scrambled Sobol
+/// sequence, 1D or 2D alike (a 2D dimension takes both coordinates of one point); the gaps
+/// between the values are historical and keep images bit-identical to earlier versions.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[repr(u8)]
 pub enum Dim {

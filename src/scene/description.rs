@@ -158,7 +158,7 @@ pub enum LightDesc {
 }
 
 impl LightDesc {
-    /// Its label.
+    /// The label messages use (`lights[3] Spot`, a glTF node's name).
     pub fn name(&self) -> &str {
         match self {
             LightDesc::Point { name, .. }

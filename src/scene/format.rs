@@ -26,13 +26,13 @@ use crate::settings::RenderDefaults;
 /// Three numbers: a point, a direction or a colour.
 pub type V3 = [f32; 3];
 
-/// The whole file.
+/// The whole file: `Scene(camera: ..., film: ..., render: ..., materials: ..., objects: ..., lights: ..., environment: ...)`.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields, rename = "Scene")]
 pub struct SceneFile {
-    /// The camera.
+    /// The one camera (the command line's `--camera auto` can replace it).
     pub camera: CameraSpec,
-    /// Image settings.
+    /// Image size (`film: (resolution: (640, 480))`).
     #[serde(default)]
     pub film: FilmSpec,
     /// Render defaults (the command line overrides each).
@@ -41,7 +41,7 @@ pub struct SceneFile {
     /// Named materials, referred to by objects.
     #[serde(default)]
     pub materials: BTreeMap<String, MaterialSpec>,
-    /// Surfaces.
+    /// Surfaces: shapes, and meshes included from OBJ or glTF files.
     #[serde(default)]
     pub objects: Vec<ObjectSpec>,
     /// Lights (besides objects with emissive materials).
@@ -63,7 +63,7 @@ pub enum EnvironmentSpec {
     /// An equirectangular (latitude-longitude) map, `.exr` or `.hdr`, in linear radiance, as
     /// Blender reads one: the image's centre looks along +X, its top row is straight up (+Y).
     Map {
-        /// The image file.
+        /// The image file, relative to the scene file.
         path: String,
         /// Factor on every texel (Blender's background strength).
         #[serde(default = "one")]
@@ -74,13 +74,13 @@ pub enum EnvironmentSpec {
     },
 }
 
-/// Camera.
+/// How the scene is seen.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub enum CameraSpec {
-    /// Pinhole camera.
+    /// Pinhole camera with a 1-pixel box filter.
     Perspective {
-        /// Eye position.
+        /// Position of the pinhole, metres.
         eye: V3,
         /// Point looked at.
         look_at: V3,
@@ -100,7 +100,7 @@ fn default_up() -> V3 {
     [0.0, 1.0, 0.0]
 }
 
-/// Image settings.
+/// Image settings of the `film` block.
 #[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FilmSpec {
@@ -108,7 +108,7 @@ pub struct FilmSpec {
     pub resolution: Option<(u32, u32)>,
 }
 
-/// A material.
+/// A material, named in `materials: { "name": ... }`.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub enum MaterialSpec {
@@ -120,7 +120,7 @@ pub enum MaterialSpec {
     /// glTF metallic-roughness, rendered as Cycles' Principled BSDF renders it (GGX with
     /// multiple-scattering compensation; exact dielectric Fresnel; F82-tint metals).
     MetalRough {
-        /// Base colour.
+        /// Base colour (linear RGB in [0, 1]): the diffuse albedo of dielectrics, F0 of metals.
         base_color: V3,
         /// Metalness in [0,1].
         #[serde(default)]
@@ -172,48 +172,50 @@ pub struct TransformSpec {
     pub scale: Option<V3>,
 }
 
-/// A surface.
+/// A surface of the scene (every shape is one-sided for emission: its front is where
+/// `edge1 × edge2` or its outward normal points).
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub enum ObjectSpec {
     /// Parallelogram `corner + s·edge1 + t·edge2`; the front faces along `edge1 × edge2`.
     Quad {
-        /// Corner.
+        /// The corner both edges start from (metres).
         corner: V3,
-        /// First edge.
+        /// The first edge, a vector from `corner` (metres).
         edge1: V3,
-        /// Second edge.
+        /// The second edge, a vector from `corner` (metres).
         edge2: V3,
-        /// Material name.
+        /// Name of a material in `materials`.
         material: String,
     },
     /// Axis-aligned box of size `size` centred at the origin, then transformed.
     Box {
-        /// Edge lengths.
+        /// Edge lengths along x, y and z before the transform (metres).
         size: V3,
-        /// Placement.
+        /// Scale, then rotation, then translation into the world.
         #[serde(default)]
         transform: TransformSpec,
-        /// Material name.
+        /// Name of a material in `materials`.
         material: String,
     },
     /// Sphere tessellated as an icosphere with smooth normals.
     Sphere {
-        /// Centre.
+        /// Centre (metres).
         center: V3,
-        /// Radius.
+        /// Radius (metres, > 0).
         radius: f32,
         /// Subdivisions of the icosahedron (default 3: 1280 triangles).
         #[serde(default = "default_subdivisions")]
         subdivisions: u32,
-        /// Material name.
+        /// Name of a material in `materials`.
         material: String,
     },
-    /// Triangle mesh from a Wavefront `.obj` file.
+    /// The meshes of a Wavefront `.obj` (with its `.mtl`) or glTF `.gltf`/`.glb` file, with
+    /// their materials, emitters and (glTF) punctual lights; not another `.ron` scene.
     Mesh {
         /// Path, relative to the scene file.
         path: String,
-        /// Placement.
+        /// Scale, then rotation, then translation into the world.
         #[serde(default)]
         transform: TransformSpec,
         /// Material for every triangle; default: the file's own materials (`.mtl`).
@@ -225,20 +227,20 @@ fn default_subdivisions() -> u32 {
     3
 }
 
-/// A light.
+/// A light that is not a surface of `objects`.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub enum LightSpec {
     /// Isotropic point light.
     Point {
-        /// Position.
+        /// Position (metres).
         position: V3,
         /// Radiant intensity in W/sr per channel.
         intensity: V3,
     },
     /// Spot light (KHR_lights_punctual falloff between the cones).
     Spot {
-        /// Position.
+        /// Position (metres).
         position: V3,
         /// Direction the cone points to.
         direction: V3,
@@ -259,11 +261,11 @@ pub enum LightSpec {
     },
     /// One emissive parallelogram `corner + s·edge1 + t·edge2`, front along `edge1 × edge2`.
     Quad {
-        /// Corner.
+        /// The corner both edges start from (metres).
         corner: V3,
-        /// First edge.
+        /// The first edge, a vector from `corner` (metres).
         edge1: V3,
-        /// Second edge.
+        /// The second edge, a vector from `corner` (metres).
         edge2: V3,
         /// Radiance in W/(m²·sr) per channel.
         radiance: V3,
@@ -330,7 +332,7 @@ pub enum GridEmission {
     /// Total emitted power of the grid in watts (luminance), with the lamps' mean colour.
     /// Held constant, the grid looks the same at 5 × 5 and 1000 × 1000.
     Power {
-        /// Watts.
+        /// Total emitted power of the grid, luminance watts (> 0).
         watts: f32,
         /// Mean colour (its luminance is normalised away).
         #[serde(default = "white")]

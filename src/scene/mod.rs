@@ -14,7 +14,6 @@ pub mod shapes;
 pub use build::{AUTO_CAMERA, BuildOptions, MAX_RESOLUTION, build};
 pub use description::SceneDescription;
 
-use std::sync::Arc;
 use std::time::Duration;
 
 use crate::camera::Camera;
@@ -61,8 +60,8 @@ pub struct Scene {
     pub geometry: Geometry,
     /// Materials, indexed by the triangles.
     pub materials: Vec<Material>,
-    /// Images the materials' textures read (shared with textured lights).
-    pub images: Arc<Vec<Image>>,
+    /// Images the textures of materials and emitters read; passed to whatever samples them.
+    pub images: Vec<Image>,
     /// Every light; emissive triangles point into this list.
     pub lights: Vec<Light>,
     /// The environment light's index in `lights`, if there is one: what rays that leave the

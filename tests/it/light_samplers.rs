@@ -164,7 +164,7 @@ fn power_sampler_is_proportional_to_power() {
 
 /// Irradiance-like contribution c_i = I·cos/d² of point light `l` at `ctx` (no occlusion).
 fn point_contribution(l: &Light, ctx: &ShadingContext) -> f64 {
-    l.sample_li(ctx.p, Default::default()).map_or(0.0, |s| s.radiance.x as f64 * (s.wi.dot(ctx.n).max(0.0)) as f64)
+    l.sample_li(ctx.p, Default::default(), &[]).map_or(0.0, |s| s.radiance.x as f64 * (s.wi.dot(ctx.n).max(0.0)) as f64)
 }
 
 /// The one-sample estimator c_I/p_I against Σ c_i, with its exact variance

@@ -198,7 +198,7 @@ fn scene_path(name: &str) -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)
 }
 
-/// Every one-light sampler agrees with `all` on the seed's 9×9 Cornell box (image-mean
+/// Every one-light sampler agrees with `all` on the predecessor project's 9×9 Cornell box (image-mean
 /// z-test and per-pixel outliers, with both films' variances).
 #[test]
 fn samplers_agree_on_cornell_9x9() {

@@ -26,7 +26,7 @@ const PARALLEL_BINNING: usize = 65536;
 /// A light to place in the tree.
 #[derive(Clone, Copy, Debug)]
 pub struct Item {
-    /// Its bounds.
+    /// What the light can emit where ([`LightBounds`]).
     pub bounds: LightBounds,
     /// The point it is binned by.
     pub centroid: Vec3A,

@@ -45,7 +45,7 @@ pub struct Collapse<'a> {
 /// The 4-wide tree: nodes in depth-first preorder (the root first), per-light trails and the
 /// depth.
 pub struct Collapsed {
-    /// The nodes.
+    /// 4-wide nodes in preorder, the root first.
     pub nodes: Vec<Node>,
     /// Per light: 2-bit child choices from the root, level 0 in the lowest bits.
     pub trails: Vec<u64>,

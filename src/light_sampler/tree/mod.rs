@@ -58,7 +58,8 @@ pub struct TreeStats {
     pub memory_bytes: usize,
 }
 
-/// The light BVH.
+/// The light BVH: quantised 4-wide nodes over the lights' bounds, sampled by splitting one
+/// 64-bit number down from the root.
 #[derive(Clone, Debug)]
 pub struct LightTree {
     nodes: Vec<Node>,

@@ -10,7 +10,6 @@ mod lights;
 mod place;
 mod validate;
 
-use std::sync::Arc;
 use std::time::Instant;
 
 use self::place::{Placement, Placer};
@@ -146,13 +145,13 @@ pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
     let placements = placements(&desc);
     check_size(&desc, &placements, resolution)?;
 
-    let images = Arc::new(desc.images.clone());
+    let images = desc.images.clone();
     let mut placer = Placer::new(&desc, &images);
     placer.place_meshes(&placements)?;
     let listed = placer.lights.len();
     placer.place_lights()?;
     let Placer { geo, mut lights, mut stats, materials, degenerate_emitters, .. } = placer;
-    let (geometry, _) = geo.build();
+    let geometry = geo.build();
     let (center, radius) = bounds(&geometry, &lights);
     // A directional light's power is its irradiance over the scene's disc.
     for (i, l) in desc.lights.iter().enumerate() {

@@ -2,8 +2,6 @@
 //! rest flattened into world space with their emissive triangles made lights; quad lights,
 //! from a mesh or a list, are one light and the two triangles rays hit.
 
-use std::sync::Arc;
-
 use super::validate::placeable;
 use crate::error::{Error, Result};
 use crate::geometry::{Attributes, GeometryBuilder, NO_LIGHT};
@@ -20,7 +18,7 @@ pub(super) type Placement<'a> = (Mat4, &'a str);
 /// What placing meshes and lights builds up.
 pub(super) struct Placer<'a> {
     pub desc: &'a SceneDescription,
-    pub images: &'a Arc<Vec<Image>>,
+    pub images: &'a [Image],
     pub geo: GeometryBuilder,
     pub lights: Vec<Light>,
     /// The description's materials, and the black one listed quad lights show.
@@ -31,7 +29,7 @@ pub(super) struct Placer<'a> {
 }
 
 impl<'a> Placer<'a> {
-    pub fn new(desc: &'a SceneDescription, images: &'a Arc<Vec<Image>>) -> Self {
+    pub fn new(desc: &'a SceneDescription, images: &'a [Image]) -> Self {
         Self {
             desc,
             images,
@@ -196,7 +194,7 @@ impl<'a> Placer<'a> {
             if emissive {
                 let light = TriangleLight::new(t.map(|i| positions[i as usize]), emission).map(|l| {
                     match (&material.emission_texture, &mesh.uvs) {
-                        (Some(tex), Some(uvs)) => l.with_texture(*tex, t.map(|i| uvs[i as usize]), self.images.clone()),
+                        (Some(tex), Some(uvs)) => l.with_texture(*tex, t.map(|i| uvs[i as usize]), self.images),
                         _ => l,
                     }
                 });
