@@ -8,7 +8,7 @@
 
 use super::RayCounters;
 use super::direct::{estimate_direct, selection_pmf};
-use crate::geometry::Ray;
+use crate::geometry::{Ray, SurfaceHit};
 use crate::light::{Light, LightId};
 use crate::light_sampler::{LightStrategy, ShadingContext};
 use crate::material::ShadingPoint;
@@ -25,6 +25,15 @@ pub struct FirstHit {
     pub normal: Vec3A,
     /// Distance along the camera ray.
     pub depth: f32,
+}
+
+impl FirstHit {
+    /// What the AOVs record of the camera ray's `hit`, seen from `wo`.
+    fn of(scene: &Scene, hit: &SurfaceHit, wo: Vec3A) -> Self {
+        let normal = if hit.n_shading.dot(wo) < 0.0 { -hit.n_shading } else { hit.n_shading };
+        let albedo = scene.materials[hit.material as usize].base_color_at(hit.uv, &scene.images);
+        Self { albedo, normal, depth: hit.t }
+    }
 }
 
 /// Russian roulette starts at this depth (after two scattering events), as in pbrt-v4.
@@ -49,12 +58,7 @@ pub fn transmittance(sigma: Rgb, distance: f32) -> Rgb {
 /// Radiance from the environment along `dir` for a ray that left the scene, MIS-weighted
 /// against next-event estimation when the ray was found by BSDF sampling at `prev`.
 #[inline]
-fn escaped(
-    scene: &Scene,
-    strategy: &LightStrategy,
-    dir: crate::math::Vec3A,
-    prev: Option<(ShadingContext, f32)>,
-) -> Rgb {
+fn escaped(scene: &Scene, strategy: &LightStrategy, dir: Vec3A, prev: Option<(ShadingContext, f32)>) -> Rgb {
     let Some(id) = scene.environment else { return Rgb::ZERO };
     let Light::Environment(env) = &scene.lights[id as usize] else { unreachable!("the environment index") };
     let le = env.radiance_from(dir);
@@ -63,6 +67,47 @@ fn escaped(
         Some((ctx, bsdf_pdf)) => power_heuristic(bsdf_pdf, selection_pmf(strategy, &ctx, LightId(id)) * env.pdf(dir)),
     };
     le * weight
+}
+
+/// The light `id` emits at `hit` back along `dir`, weighted against next-event estimation
+/// when the ray was found by BSDF sampling at `prev`.
+#[inline]
+fn emitted(
+    scene: &Scene,
+    strategy: &LightStrategy,
+    id: u32,
+    hit: &SurfaceHit,
+    dir: Vec3A,
+    prev: Option<(ShadingContext, f32)>,
+) -> Rgb {
+    let light = &scene.lights[id as usize];
+    let le = light.emitted(hit.n_geom, dir, hit.uv, &scene.images);
+    if le == Rgb::ZERO {
+        return le;
+    }
+    let weight = match prev {
+        None => 1.0,
+        Some((ctx, bsdf_pdf)) => {
+            let pmf = selection_pmf(strategy, &ctx, LightId(id));
+            power_heuristic(bsdf_pdf, pmf * light.pdf_li(ctx.p, hit.p, hit.n_geom))
+        }
+    };
+    le * weight
+}
+
+/// Russian roulette from [`RR_MIN_DEPTH`] on: a path survives with probability
+/// min(1, max(beta)) and carries `beta` divided by it; false when it ends.
+#[inline]
+fn survives_roulette(stream: &SampleStream, depth: u32, beta: &mut Rgb) -> bool {
+    if depth < RR_MIN_DEPTH {
+        return true;
+    }
+    let survive = beta.max_element().min(1.0);
+    if stream.get_1d(depth, Dim::RussianRoulette, 0) >= survive {
+        return false;
+    }
+    *beta /= survive;
+    true
 }
 
 /// Radiance arriving along `ray` (a camera ray), with at most `max_depth` scattering events.
@@ -94,24 +139,10 @@ pub fn radiance(
         }
         let wo = -ray.dir.normalize();
         if depth == 0 {
-            let n = if hit.n_shading.dot(wo) < 0.0 { -hit.n_shading } else { hit.n_shading };
-            let albedo = scene.materials[hit.material as usize].base_color_at(hit.uv, &scene.images);
-            first_hit = Some(FirstHit { albedo, normal: n, depth: hit.t });
+            first_hit = Some(FirstHit::of(scene, &hit, wo));
         }
-
         if let Some(id) = hit.light {
-            let light = &scene.lights[id as usize];
-            let le = light.emitted(hit.n_geom, ray.dir, hit.uv, &scene.images);
-            if le != Rgb::ZERO {
-                let weight = match prev {
-                    None => 1.0,
-                    Some((ctx, bsdf_pdf)) => {
-                        let pmf = selection_pmf(strategy, &ctx, LightId(id));
-                        power_heuristic(bsdf_pdf, pmf * light.pdf_li(ctx.p, hit.p, hit.n_geom))
-                    }
-                };
-                l += beta * le * weight;
-            }
+            l += beta * emitted(scene, strategy, id, &hit, ray.dir, prev);
         }
         if depth == max_depth {
             break;
@@ -138,13 +169,8 @@ pub fn radiance(
         prev = Some((ShadingContext { p: hit.p, n: sp.selection_normal() }, bs.pdf));
         ray = Ray::new(sp.ray_origin(hit.p, bs.wi), bs.wi);
         depth += 1;
-
-        if depth >= RR_MIN_DEPTH {
-            let survive = beta.max_element().min(1.0);
-            if stream.get_1d(depth, Dim::RussianRoulette, 0) >= survive {
-                break;
-            }
-            beta /= survive;
+        if !survives_roulette(stream, depth, &mut beta) {
+            break;
         }
     }
     debug_assert!(l.is_finite(), "non-finite radiance {l}");
