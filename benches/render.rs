@@ -39,7 +39,7 @@ fn bench(c: &mut Criterion) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-320x320.ron");
     let desc = myriad::io::load_scene(&path, &Default::default()).unwrap();
     group.bench_function("cornell-320x320 (102400 lamps)", |b| {
-        b.iter(|| myriad::scene::build(desc.clone(), &BuildOptions::default()).unwrap().stats.triangles)
+        b.iter(|| myriad::scene::build(desc.clone(), &BuildOptions::default()).unwrap().1.stats.triangles)
     });
     group.finish();
 }

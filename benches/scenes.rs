@@ -143,15 +143,19 @@ fn surface(n: usize, emissive: bool) -> PathBuf {
 }
 
 fn load(path: &Path) -> Scene {
+    load_report(path).scene
+}
+
+fn load_report(path: &Path) -> myriad::commands::LoadedScene {
     let options = BuildOptions { resolution: Some(UVec2::new(64, 48)), camera: None };
-    load_scene(Some(path), &options.into()).unwrap().scene
+    load_scene(Some(path), &options.into()).unwrap()
 }
 
 fn gltf_load(c: &mut Criterion) {
     let mut group = c.benchmark_group("gltf_load");
     group.sample_size(10);
     for (label, path) in [("5000 lamp objects", lamps(5000)), ("1M emissive triangles", surface(1_000_000, true))] {
-        group.bench_function(label, |b| b.iter(|| load(black_box(&path)).stats.triangles));
+        group.bench_function(label, |b| b.iter(|| load_report(black_box(&path)).report.stats.triangles));
     }
     group.finish();
 }
@@ -163,7 +167,7 @@ fn bvh_build(c: &mut Criterion) {
         let desc = myriad::io::load_scene(&surface(n, false), &Default::default()).unwrap();
         let options = BuildOptions { resolution: Some(UVec2::new(64, 48)), camera: None };
         group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
-            b.iter(|| myriad::scene::build(desc.clone(), &options).unwrap().stats.bvh_build_time)
+            b.iter(|| myriad::scene::build(desc.clone(), &options).unwrap().1.stats.bvh_build_time)
         });
     }
     group.finish();

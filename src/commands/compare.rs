@@ -12,7 +12,7 @@ use std::time::Instant;
 
 use super::progress::Progress;
 use super::settings::{COMPARE_DEFAULT_SPP, RenderRequest, Resolved};
-use super::{SceneOptions, load_scene};
+use super::{LoadedScene, SceneOptions, load_scene};
 use crate::compare::images::{SheetColumn, contact_sheet, error_picture, preview_picture};
 use crate::compare::metrics::{BIAS_ALPHA, bias_check, efficiency, error_metrics, relative_error_map};
 use crate::compare::plot::{Curve, convergence_svg};
@@ -24,7 +24,7 @@ use crate::interrupt::Stop;
 use crate::light_sampler::LightStrategy;
 use crate::math::{Rgb, UVec2};
 use crate::render::{Budget, RenderObserver, RenderSettings, render};
-use crate::scene::{BuildOptions, Scene};
+use crate::scene::{BuildOptions, Scene, SceneReport};
 use crate::settings::LightSamplerKind;
 
 /// The samplers compared when none are named (the scene's own is added to them).
@@ -109,12 +109,17 @@ fn default_reference_sampler(lights: usize) -> LightSamplerKind {
 
 /// Everything the rendered reference depends on: the bytes of every file the scene was read
 /// from, how it was read and built, every render setting, and this build of myriad.
-fn reference_key(opts: &CompareOptions, scene: &Scene, sampler: LightSamplerKind, max_depth: u32) -> Result<String> {
+fn reference_key(
+    opts: &CompareOptions,
+    loaded: &LoadedScene,
+    sampler: LightSamplerKind,
+    max_depth: u32,
+) -> Result<String> {
     let mut key = Fingerprint::new("myriad compare reference");
-    for input in &scene.inputs {
+    for input in &loaded.report.inputs {
         key.file(input)?;
     }
-    let size = scene.camera.resolution();
+    let size = loaded.scene.camera.resolution();
     key.value("gltf_scene", format!("{:?}", opts.load.gltf_scene))
         .value("punctual_scale", opts.load.punctual_scale.to_bits())
         .value("camera", opts.camera.as_deref().unwrap_or("-"))
@@ -128,7 +133,8 @@ fn reference_key(opts: &CompareOptions, scene: &Scene, sampler: LightSamplerKind
 }
 
 /// Loads the given reference, reuses a cached one, or renders and caches a new one.
-fn reference(opts: &CompareOptions, scene: &Scene, max_depth: u32) -> Result<Reference> {
+fn reference(opts: &CompareOptions, loaded: &LoadedScene, max_depth: u32) -> Result<Reference> {
+    let scene = &loaded.scene;
     let size = scene.camera.resolution();
     if let Some(path) = &opts.reference {
         let ReferenceFile { pixels, variance, .. } = read_reference(path, size)?;
@@ -138,7 +144,7 @@ fn reference(opts: &CompareOptions, scene: &Scene, max_depth: u32) -> Result<Ref
     }
     let sampler = opts.reference_sampler.unwrap_or_else(|| default_reference_sampler(scene.lights.len()));
     let origin = format!("{sampler}, {} spp, seed {REFERENCE_SEED:#x}", opts.reference_spp);
-    let key = reference_key(opts, scene, sampler, max_depth)?;
+    let key = reference_key(opts, loaded, sampler, max_depth)?;
     let path = opts.out_dir.join("reference.exr");
     if path.exists()
         && let Ok(ReferenceFile { pixels, variance, meta }) = read_reference(&path, size)
@@ -180,11 +186,11 @@ struct Plan {
 
 impl Plan {
     /// The command line's choices over the scene's, over the defaults.
-    fn new(opts: &CompareOptions, scene: &Scene) -> Result<Self> {
-        let Resolved { budget, seed, max_depth, .. } = opts.settings.resolve(&scene.render, COMPARE_DEFAULT_SPP)?;
+    fn new(opts: &CompareOptions, report: &SceneReport) -> Result<Self> {
+        let Resolved { budget, seed, max_depth, .. } = opts.settings.resolve(&report.render, COMPARE_DEFAULT_SPP)?;
         let samplers = opts.samplers.clone().unwrap_or_else(|| {
             let mut samplers = DEFAULT_SAMPLERS.to_vec();
-            samplers.extend(scene.render.sampler.filter(|s| !samplers.contains(s)));
+            samplers.extend(report.render.sampler.filter(|s| !samplers.contains(s)));
             samplers
         });
         if samplers.is_empty() || opts.seeds == 0 {
@@ -221,11 +227,11 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
     // The scene must load before the output folder is made: a broken scene leaves nothing.
     let loaded = load_scene(Some(&opts.scene), &scene_options)?;
     let scene = &loaded.scene;
-    let plan = Plan::new(opts, scene)?;
+    let plan = Plan::new(opts, &loaded.report)?;
     // Ctrl-C stops the comparison (after the pass under way) and writes no report.
     let _busy = crate::interrupt::busy();
     crate::io::ensure_dir(&opts.out_dir)?;
-    let reference = reference(opts, scene, plan.max_depth)?;
+    let reference = reference(opts, &loaded, plan.max_depth)?;
     let size = scene.camera.resolution();
     let mut columns = vec![SheetColumn {
         title: "reference".into(),

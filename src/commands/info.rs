@@ -27,11 +27,11 @@ pub fn info(path: Option<&Path>, options: &SceneOptions) -> Result<InfoReport> {
 
 impl fmt::Display for InfoReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let s = &self.loaded.scene;
-        let st = &s.stats;
+        let (s, r) = (&self.loaded.scene, &self.loaded.report);
+        let st = &r.stats;
         let res = s.camera.resolution();
-        writeln!(f, "scene        {}", s.source)?;
-        writeln!(f, "camera       '{}', {} × {} px", s.camera_name, res.x, res.y)?;
+        writeln!(f, "scene        {}", r.source)?;
+        writeln!(f, "camera       '{}', {} × {} px", r.camera_name, res.x, res.y)?;
         writeln!(
             f,
             "cameras      {}{}",
@@ -88,7 +88,7 @@ impl fmt::Display for InfoReport {
                 t.memory_bytes as f64 / s.lights.len() as f64
             )?;
         }
-        for w in &s.warnings {
+        for w in &r.warnings {
             writeln!(f, "warning      {w}")?;
         }
         Ok(())

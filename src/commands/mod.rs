@@ -17,7 +17,7 @@ use std::time::{Duration, Instant};
 
 use crate::error::Result;
 use crate::io::LoadOptions;
-use crate::scene::{self, BuildOptions, Scene, SceneDescription};
+use crate::scene::{self, BuildOptions, Scene, SceneDescription, SceneReport};
 
 /// The scene built into the binary: the predecessor project's Cornell box with a 5 × 5 ceiling grid.
 pub const DEFAULT_SCENE: &str = include_str!("../../scenes/cornell-5x5.ron");
@@ -40,10 +40,12 @@ impl From<BuildOptions> for SceneOptions {
     }
 }
 
-/// A scene loaded and built, with how long each stage took.
+/// A scene loaded and built, with what the build found and how long each stage took.
 pub struct LoadedScene {
     /// The scene.
     pub scene: Scene,
+    /// Source, camera, the file's settings, counts, warnings, files read.
+    pub report: SceneReport,
     /// Time to read and parse the file(s).
     pub load_time: Duration,
 }
@@ -62,8 +64,8 @@ pub fn load_scene(path: Option<&Path>, options: &SceneOptions) -> Result<LoadedS
     let desc = load_description(path, &options.load)?;
     let load_time = start.elapsed();
     let source = desc.source.clone();
-    let scene = crate::guard::contain(&source, || scene::build(desc, &options.build))?;
-    Ok(LoadedScene { scene, load_time })
+    let (scene, report) = crate::guard::contain(&source, || scene::build(desc, &options.build))?;
+    Ok(LoadedScene { scene, report, load_time })
 }
 
 /// `out.exr` → `out.png`.

@@ -101,7 +101,7 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
         build: BuildOptions { resolution: opts.resolution, camera: opts.camera.clone() },
     };
     let loaded = load_scene(opts.scene.as_deref(), &scene_options)?;
-    let resolved = opts.settings.resolve(&loaded.scene.render, DEFAULT_SPP)?;
+    let resolved = opts.settings.resolve(&loaded.report.render, DEFAULT_SPP)?;
     let (settings, sampler) = (resolved.render_settings(opts.aovs), resolved.sampler);
     let scene = &loaded.scene;
 
@@ -178,14 +178,14 @@ fn paths(ps: &[PathBuf]) -> String {
 
 impl fmt::Display for RenderReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let s = &self.loaded.scene;
+        let (s, r) = (&self.loaded.scene, &self.loaded.report);
         let st = &self.output.stats;
         let res = self.output.film.size();
         writeln!(
             f,
             "scene      {} ({} triangles, {} lights, {} × {} px)",
-            s.source,
-            s.stats.triangles,
+            r.source,
+            r.stats.triangles,
             s.lights.len(),
             res.x,
             res.y
@@ -194,8 +194,8 @@ impl fmt::Display for RenderReport {
             f,
             "prepare    load {}, build {} (BVH {}), {} sampler {} ({})",
             human_duration(self.loaded.load_time),
-            human_duration(s.stats.build_time),
-            human_duration(s.stats.bvh_build_time),
+            human_duration(r.stats.build_time),
+            human_duration(r.stats.bvh_build_time),
             self.sampler,
             human_duration(self.sampler_build_time),
             human_bytes(self.sampler_bytes as u64)
@@ -226,7 +226,7 @@ impl fmt::Display for RenderReport {
         if st.non_finite_samples > 0 {
             writeln!(f, "warning    {} samples were not finite and counted as black", st.non_finite_samples)?;
         }
-        for w in &s.warnings {
+        for w in &r.warnings {
             writeln!(f, "warning    {w}")?;
         }
         write!(f, "wrote      {}", paths(&self.written))

@@ -1,6 +1,8 @@
 //! The renderable scene: immutable, `Sync`, built once from a [`SceneDescription`].
 //!
-//! Owns: [`Scene`] (camera, geometry with its BVH, materials, lights, bounds, statistics),
+//! Owns: [`Scene`] (camera, geometry with its BVH, materials, lights, bounds) and the
+//! [`SceneReport`] its build makes (source, camera name, the file's render settings,
+//! statistics, warnings, files read),
 //! the description types and the RON format (plain data), procedural shapes, the built-in
 //! default scene, and `build` (validate, flatten instances, emissive surfaces → lights).
 //! Depends on geometry, material, light and camera; never touches files (the `io` loaders
@@ -48,14 +50,29 @@ pub struct SceneStats {
     pub light_bytes: usize,
 }
 
-/// A scene ready to render.
-pub struct Scene {
+/// What building a scene found, for people and for caches: where it came from, the camera
+/// chosen, the render settings the file asked for, counts and timings, warnings, and every
+/// file read. Nothing here is needed to render.
+#[derive(Clone, Debug, Default)]
+pub struct SceneReport {
     /// Where it came from.
     pub source: String,
+    /// Name of the camera in use.
+    pub camera_name: String,
+    /// Render settings the scene asked for.
+    pub render: crate::settings::RenderDefaults,
+    /// Counts and timings.
+    pub stats: SceneStats,
+    /// What the loader and the build skipped or approximated.
+    pub warnings: Vec<String>,
+    /// Every file the scene was read from ([`SceneDescription::inputs`]).
+    pub inputs: Vec<std::path::PathBuf>,
+}
+
+/// A scene ready to render: geometry, materials, lights and the camera, and nothing else.
+pub struct Scene {
     /// The camera in use (with the output resolution).
     pub camera: Camera,
-    /// Name of that camera.
-    pub camera_name: String,
     /// Triangles and the BVH.
     pub geometry: Geometry,
     /// Materials, indexed by the triangles.
@@ -71,14 +88,6 @@ pub struct Scene {
     pub center: Vec3A,
     /// Radius of that sphere (sizes directional lights' power).
     pub radius: f32,
-    /// Render settings the scene asked for.
-    pub render: crate::settings::RenderDefaults,
-    /// Counts and timings.
-    pub stats: SceneStats,
-    /// What the loader and the build skipped or approximated.
-    pub warnings: Vec<String>,
-    /// Every file the scene was read from ([`SceneDescription::inputs`]).
-    pub inputs: Vec<std::path::PathBuf>,
 }
 
 /// A hash of a ray (its origin and direction bits): rays of different samples, bounces and

@@ -270,15 +270,16 @@ fn impossible_material_values_are_errors_or_warnings_naming_the_material() {
                     "KHR_materials_volume": {"thicknessFactor": 1, "attenuationDistance": -1}}))(&mut doc);
     let path = dir.path().join("glass.gltf");
     std::fs::write(&path, doc.to_string()).unwrap();
-    let scene = load(&path, Some(UVec2::new(8, 6)), None).unwrap();
+    let myriad::commands::LoadedScene { scene, report, .. } =
+        crate::common::load_report(&path, Some(UVec2::new(8, 6)), None).unwrap();
     let name = &scene.materials[0].name;
     assert!(
-        scene
+        report
             .warnings
             .iter()
             .any(|w| w.contains(&format!("material '{name}'")) && w.contains("attenuationDistance -1")),
         "{:?}",
-        scene.warnings
+        report.warnings
     );
     let film = crate::render::render_with(&scene, myriad::settings::LightSamplerKind::Tree, 4, 4, 1);
     assert!(film.means().iter().all(|p| p.is_finite()));

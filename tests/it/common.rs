@@ -203,7 +203,7 @@ pub fn scene_from(
         desc.meshes.push(mesh);
         desc.instances.push(InstanceDesc { mesh: i as u32, transform: m, name: format!("mesh {i}") });
     }
-    build(desc, &BuildOptions { resolution: Some(resolution), camera: None }).expect("test scene builds")
+    build(desc, &BuildOptions { resolution: Some(resolution), camera: None }).expect("test scene builds").0
 }
 
 /// A quad light from corner and edges.
@@ -299,11 +299,20 @@ pub fn cornell(ext: &str) -> PathBuf {
 
 /// Loads and builds a scene file as `myriad render` does.
 pub fn load(path: &Path, resolution: Option<UVec2>, camera: Option<&str>) -> myriad::Result<Scene> {
+    load_report(path, resolution, camera).map(|l| l.scene)
+}
+
+/// Loads a scene file as the binary does: the scene with its build report.
+pub fn load_report(
+    path: &Path,
+    resolution: Option<UVec2>,
+    camera: Option<&str>,
+) -> myriad::Result<myriad::commands::LoadedScene> {
     let options = myriad::commands::SceneOptions {
         load: Default::default(),
         build: BuildOptions { resolution, camera: camera.map(String::from) },
     };
-    myriad::commands::load_scene(Some(path), &options).map(|l| l.scene)
+    myriad::commands::load_scene(Some(path), &options)
 }
 
 /// The Cornell glTF as JSON, for tests to break.

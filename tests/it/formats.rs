@@ -2,8 +2,9 @@
 //! render what Cycles renders; one Cornell box written as RON, OBJ/MTL and glTF renders alike;
 //! broken files are clear errors naming the file and the element.
 
-use crate::common::{assert_mentions, blender, cornell, cornell_json, load, load_error};
+use crate::common::{assert_mentions, blender, cornell, cornell_json, load, load_error, load_report};
 use crate::render::{compare_films, render_with};
+use myriad::commands::LoadedScene;
 use myriad::math::{Rgb, UVec2};
 use myriad::scene::{AUTO_CAMERA, Scene};
 use myriad::settings::LightSamplerKind;
@@ -34,8 +35,9 @@ const BLENDER_FILES: [(&str, usize, usize, usize, usize, LightCounts); 4] = [
 #[test]
 fn blender_exports_load_with_the_counts_of_their_readme() {
     for (file, meshes, instances, triangles, emissive, lights) in BLENDER_FILES {
-        let scene = load(&blender(file), None, None).unwrap_or_else(|e| panic!("{file}: {e}"));
-        let st = &scene.stats;
+        let LoadedScene { scene, report, .. } =
+            load_report(&blender(file), None, None).unwrap_or_else(|e| panic!("{file}: {e}"));
+        let st = &report.stats;
         assert_eq!(
             (st.meshes, st.instances, st.triangles, st.emissive_triangles),
             (meshes, instances, triangles, emissive),
@@ -44,11 +46,11 @@ fn blender_exports_load_with_the_counts_of_their_readme() {
         assert_eq!(light_kinds(&scene), lights.iter().copied().collect(), "{file}");
         assert_eq!(st.cameras, ["Camera"], "{file}");
         assert_eq!(scene.camera.resolution(), UVec2::new(640, 480), "{file}: 4:3 from aspectRatio");
-        assert!(scene.warnings.is_empty(), "{file}: {:?}", scene.warnings);
+        assert!(report.warnings.is_empty(), "{file}: {:?}", report.warnings);
     }
     // One emissive box mesh placed 400 times: each placement is 12 lights of its own, and the
     // two meshes are stored once each.
-    let inst = load(&blender("instanced_lamps.glb"), None, None).unwrap();
+    let inst = load_report(&blender("instanced_lamps.glb"), None, None).unwrap().report;
     assert_eq!(inst.stats.stored_triangles, 4802);
 }
 
@@ -113,8 +115,8 @@ fn one_cornell_box_as_ron_obj_and_gltf_renders_alike() {
         .iter()
         .zip(1u64..)
         .map(|(ext, seed)| {
-            let scene = load(&cornell(ext), size, Some(AUTO_CAMERA)).unwrap();
-            assert_eq!(scene.stats.triangles, 32, "{ext}");
+            let LoadedScene { scene, report, .. } = load_report(&cornell(ext), size, Some(AUTO_CAMERA)).unwrap();
+            assert_eq!(report.stats.triangles, 32, "{ext}");
             assert!((scene.total_power() - 9.806).abs() < 1e-2, "{ext}: {} W", scene.total_power());
             (ext, render_with(&scene, LightSamplerKind::Tree, 64, 8, seed))
         })
@@ -174,8 +176,8 @@ fn a_missing_texture_is_a_warning_naming_it() {
     doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0});
     let path = dir.path().join("textured.gltf");
     std::fs::write(&path, doc.to_string()).unwrap();
-    let scene = load(&path, Some(UVec2::new(8, 6)), None).unwrap();
-    assert!(scene.warnings.iter().any(|w| w.contains("walls.png")), "{:?}", scene.warnings);
+    let report = load_report(&path, Some(UVec2::new(8, 6)), None).unwrap().report;
+    assert!(report.warnings.iter().any(|w| w.contains("walls.png")), "{:?}", report.warnings);
 }
 
 #[test]
@@ -186,9 +188,9 @@ fn points_and_lines_are_skipped_with_one_warning() {
     doc["meshes"][1]["primitives"][0]["mode"] = json!(1);
     let path = dir.path().join("points.gltf");
     std::fs::write(&path, doc.to_string()).unwrap();
-    let scene = load(&path, Some(UVec2::new(8, 6)), None).unwrap();
-    let skipped: Vec<_> = scene.warnings.iter().filter(|w| w.contains("point and line")).collect();
-    assert_eq!(skipped.len(), 1, "{:?}", scene.warnings);
+    let report = load_report(&path, Some(UVec2::new(8, 6)), None).unwrap().report;
+    let skipped: Vec<_> = report.warnings.iter().filter(|w| w.contains("point and line")).collect();
+    assert_eq!(skipped.len(), 1, "{:?}", report.warnings);
 }
 
 #[test]
@@ -200,8 +202,8 @@ fn an_obj_with_a_missing_texture_warns_and_names_it() {
     )
     .unwrap();
     std::fs::write(dir.path().join("t.mtl"), "newmtl m\nKd 1 1 1\nmap_Kd bricks.jpg\n").unwrap();
-    let scene = load(&dir.path().join("t.obj"), Some(UVec2::new(8, 6)), Some(AUTO_CAMERA)).unwrap();
-    assert!(scene.warnings.iter().any(|w| w.contains("bricks.jpg")), "{:?}", scene.warnings);
+    let report = load_report(&dir.path().join("t.obj"), Some(UVec2::new(8, 6)), Some(AUTO_CAMERA)).unwrap().report;
+    assert!(report.warnings.iter().any(|w| w.contains("bricks.jpg")), "{:?}", report.warnings);
 }
 
 #[test]
@@ -222,11 +224,11 @@ fn a_ron_scene_places_a_gltf_file_and_adds_a_light_grid() {
     );
     let path = dir.path().join("mix.ron");
     std::fs::write(&path, ron).unwrap();
-    let scene = load(&path, Some(UVec2::new(8, 6)), None).unwrap();
-    assert_eq!(scene.stats.triangles, 32 + 4802 + 2 * 16);
+    let LoadedScene { scene, report, .. } = load_report(&path, Some(UVec2::new(8, 6)), None).unwrap();
+    assert_eq!(report.stats.triangles, 32 + 4802 + 2 * 16);
     assert_eq!(light_kinds(&scene), [("quad", 16), ("triangle", 2 + 4800)].into_iter().collect());
     // The included file's camera is not used: the RON scene's is.
-    assert_eq!(scene.stats.cameras.len(), 1);
+    assert_eq!(report.stats.cameras.len(), 1);
 }
 
 #[test]

@@ -17,7 +17,7 @@ fn scene(body: &str) -> String {
     format!("{HEAD}{body}\n)")
 }
 
-fn built(text: &str, dir: &Path) -> myriad::Result<myriad::scene::Scene> {
+fn built(text: &str, dir: &Path) -> myriad::Result<(myriad::scene::Scene, myriad::scene::SceneReport)> {
     build(
         parse(text, "test.ron", dir, &Default::default())?,
         &BuildOptions { resolution: Some(UVec2::new(8, 6)), camera: None },
@@ -31,10 +31,10 @@ fn a_million_lamp_grid_loads() {
          emission: Power(watts: 50), color_jitter: 0.1, decades: 2, seed: 4) ],",
     );
     let t = Instant::now();
-    let s = built(&text, Path::new(".")).unwrap();
+    let (s, report) = built(&text, Path::new(".")).unwrap();
     eprintln!("1000 × 1000 grid: load + build {:.2} s", t.elapsed().as_secs_f64());
     assert_eq!(s.lights.len(), 1_000_000);
-    assert_eq!(s.stats.triangles, 2_000_000);
+    assert_eq!(report.stats.triangles, 2_000_000);
     assert!((s.total_power() - 50.0).abs() < 50.0 * 1e-3, "{}", s.total_power());
 }
 
@@ -47,10 +47,10 @@ fn emissive_objects_become_quad_lights_and_boxes_six() {
             Sphere(center: (2, 1, 0), radius: 0.5, subdivisions: 1, material: "white"),
         ],"#,
     );
-    let s = built(&text, Path::new(".")).unwrap();
+    let (s, report) = built(&text, Path::new(".")).unwrap();
     assert_eq!(s.lights.len(), 7);
     assert!(s.lights.iter().all(|l| matches!(l, Light::Quad(_))));
-    assert_eq!(s.stats.triangles, 2 + 12 + 80);
+    assert_eq!(report.stats.triangles, 2 + 12 + 80);
     // The box's faces point outwards after the rotation.
     for l in &s.lights[1..] {
         let Light::Quad(q) = l else { unreachable!() };
@@ -69,8 +69,8 @@ fn obj_meshes_load_with_transform_and_materials() {
     .unwrap();
     std::fs::write(dir.path().join("tri.mtl"), "newmtl glow\nKd 0 0 0\nKe 2 1 0.5\n").unwrap();
     let text = scene(r#"objects: [ Mesh(path: "tri.obj", transform: (translate: (0, 0, -1), scale: (2, 2, 2))) ],"#);
-    let s = built(&text, dir.path()).unwrap();
-    assert_eq!(s.stats.triangles, 2);
+    let (s, report) = built(&text, dir.path()).unwrap();
+    assert_eq!(report.stats.triangles, 2);
     assert_eq!(s.lights.len(), 2, "a polygon with Ke becomes emissive triangles");
     let Light::Triangle(t) = &s.lights[0] else { panic!() };
     assert!((t.area - 2.0).abs() < 1e-5, "scaled by 2: {}", t.area);
@@ -79,9 +79,9 @@ fn obj_meshes_load_with_transform_and_materials() {
 
     // Without its .mtl the mesh loads grey, with a warning that says so.
     std::fs::remove_file(dir.path().join("tri.mtl")).unwrap();
-    let s = built(&text, dir.path()).unwrap();
+    let (s, report) = built(&text, dir.path()).unwrap();
     assert!(s.lights.is_empty());
-    assert!(s.warnings.iter().any(|w| w.contains("material library")), "{:?}", s.warnings);
+    assert!(report.warnings.iter().any(|w| w.contains("material library")), "{:?}", report.warnings);
 }
 
 #[test]
@@ -89,7 +89,7 @@ fn mirrored_emitters_keep_their_front_side() {
     // glTF's rule: a negative-determinant transform reverses the winding, so the front face
     // of a mirrored one-sided emitter is the mirror image of the original front face.
     let text = scene(r#"objects: [ Box(size: (1, 1, 1), transform: (scale: (-1, 1, 1)), material: "lamp") ],"#);
-    let s = built(&text, Path::new(".")).unwrap();
+    let (s, _) = built(&text, Path::new(".")).unwrap();
     for l in &s.lights {
         let Light::Quad(q) = l else { unreachable!() };
         let c = q.p0 + 0.5 * (q.e1 + q.e2);

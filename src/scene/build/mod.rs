@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use self::place::{Placement, Placer};
 use super::description::{CameraDesc, CameraPlacement, LightDesc, SceneDescription};
-use super::{Scene, SceneStats};
+use super::{Scene, SceneReport, SceneStats};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::geometry::Geometry;
@@ -136,7 +136,7 @@ fn check_size(desc: &SceneDescription, placements: &[(Vec<Placement>, bool)], re
 /// Validates `desc` and builds the scene (BVH built in the current rayon pool): validate →
 /// camera and size → memory check → place meshes → listed lights → BVH → bounds →
 /// directional powers and the environment → camera.
-pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
+pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<(Scene, SceneReport)> {
     let start = Instant::now();
     let file = desc.source.as_str();
     validate::description(&desc)?;
@@ -176,22 +176,16 @@ pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<Scene> {
     }
     lights.shrink_to_fit();
     stats.record(&desc, &geometry, &lights, start);
-    Ok(Scene {
+    let scene = Scene { camera, geometry, materials, images, lights, environment, center, radius };
+    let report = SceneReport {
         source: desc.source.clone(),
-        camera,
         camera_name,
-        geometry,
-        materials,
-        images,
-        lights,
-        environment,
-        center,
-        radius,
         render: desc.render,
         stats,
         warnings,
         inputs: desc.inputs.clone(),
-    })
+    };
+    Ok((scene, report))
 }
 
 /// The centre and radius of a sphere around every triangle and positioned light (a unit
