@@ -69,8 +69,9 @@ fn escaped(scene: &Scene, strategy: &LightStrategy, dir: Vec3A, prev: Option<(Sh
     le * weight
 }
 
-/// The light `id` emits at `hit` back along `dir`, weighted against next-event estimation
-/// when the ray was found by BSDF sampling at `prev`.
+/// What the light `id` emitting at `hit` back along `dir` adds to a path of throughput
+/// `beta`, weighted against next-event estimation when the ray was found by BSDF sampling at
+/// `prev`.
 #[inline]
 fn emitted(
     scene: &Scene,
@@ -79,6 +80,7 @@ fn emitted(
     hit: &SurfaceHit,
     dir: Vec3A,
     prev: Option<(ShadingContext, f32)>,
+    beta: Rgb,
 ) -> Rgb {
     let light = &scene.lights[id as usize];
     let le = light.emitted(hit.n_geom, dir, hit.uv, &scene.images);
@@ -92,7 +94,7 @@ fn emitted(
             power_heuristic(bsdf_pdf, pmf * light.pdf_li(ctx.p, hit.p, hit.n_geom))
         }
     };
-    le * weight
+    beta * le * weight
 }
 
 /// Russian roulette from [`RR_MIN_DEPTH`] on: a path survives with probability
@@ -142,7 +144,7 @@ pub fn radiance(
             first_hit = Some(FirstHit::of(scene, &hit, wo));
         }
         if let Some(id) = hit.light {
-            l += beta * emitted(scene, strategy, id, &hit, ray.dir, prev);
+            l += emitted(scene, strategy, id, &hit, ray.dir, prev, beta);
         }
         if depth == max_depth {
             break;
