@@ -26,7 +26,8 @@ fn bench(c: &mut Criterion) {
                 continue;
             }
             let strategy = LightStrategy::build(kind, &s.lights, s.radius);
-            let settings = RenderSettings { budget: Budget::Spp(4), seed: 0, max_depth: 8, aovs: Default::default() };
+            let (budget, resolution) = (Budget::Spp(4), UVec2::new(80, 60));
+            let settings = RenderSettings { budget, seed: 0, max_depth: 8, resolution, aovs: Default::default() };
             group.bench_with_input(BenchmarkId::new(kind.name(), name), &name, |b, _| {
                 b.iter(|| render(&s, &strategy, &settings, &mut ()).stats.samples)
             });

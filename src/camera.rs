@@ -22,13 +22,12 @@ pub struct Camera {
     up: Vec3A,
     forward: Vec3A,
     tan_half_fov_y: f32,
-    resolution: UVec2,
 }
 
 impl Camera {
     /// A camera at `eye` looking at `target`, `up` giving the vertical, vertical field of view
     /// `yfov` in radians. An error says what makes the view degenerate, with the values.
-    pub fn look_at(eye: Vec3A, target: Vec3A, up: Vec3A, yfov: f32, resolution: UVec2) -> Result<Self, String> {
+    pub fn look_at(eye: Vec3A, target: Vec3A, up: Vec3A, yfov: f32) -> Result<Self, String> {
         check_position("eye", eye)?;
         check_position("target", target)?;
         let d = target - eye;
@@ -44,11 +43,11 @@ impl Camera {
             .try_normalize()
             .ok_or_else(|| format!("up {up} is zero or parallel to the view direction {forward}"))?;
         let up = right.cross(forward);
-        Self::new(eye, right, up, forward, yfov, resolution)
+        Self::new(eye, right, up, forward, yfov)
     }
 
     /// A camera placed by a node's world matrix (glTF: looks down local −Z, +Y up).
-    pub fn from_matrix(world: &Mat4, yfov: f32, resolution: UVec2) -> Result<Self, String> {
+    pub fn from_matrix(world: &Mat4, yfov: f32) -> Result<Self, String> {
         let origin = Vec3A::from(world.w_axis.truncate());
         check_position("position", origin)?;
         let back = Vec3A::from(world.z_axis.truncate());
@@ -59,41 +58,21 @@ impl Camera {
             format!("its matrix's Y axis {up_hint} is zero or parallel to its view direction {forward}")
         })?;
         let up = right.cross(forward);
-        Self::new(origin, right, up, forward, yfov, resolution)
+        Self::new(origin, right, up, forward, yfov)
     }
 
-    fn new(
-        origin: Vec3A,
-        right: Vec3A,
-        up: Vec3A,
-        forward: Vec3A,
-        yfov: f32,
-        resolution: UVec2,
-    ) -> Result<Self, String> {
+    fn new(origin: Vec3A, right: Vec3A, up: Vec3A, forward: Vec3A, yfov: f32) -> Result<Self, String> {
         if !(yfov > 0.0 && yfov < std::f32::consts::PI) {
             return Err(format!("its vertical field of view {}° is not between 0° and 180°", yfov.to_degrees()));
         }
-        if resolution.min_element() == 0 {
-            return Err(format!("the image size {} × {} is empty", resolution.x, resolution.y));
-        }
-        Ok(Self { origin, right, up, forward, tan_half_fov_y: (0.5 * yfov).tan(), resolution })
+        Ok(Self { origin, right, up, forward, tan_half_fov_y: (0.5 * yfov).tan() })
     }
 
-    /// The same camera rendering at another resolution (vertical field of view kept).
-    pub fn with_resolution(mut self, resolution: UVec2) -> Self {
-        self.resolution = resolution;
-        self
-    }
-
-    /// Image size in pixels.
-    pub fn resolution(&self) -> UVec2 {
-        self.resolution
-    }
-
-    /// The primary ray through `pixel` at sub-pixel offset `jitter ∈ [0,1)²` (unit direction).
+    /// The primary ray through `pixel` of an image of `resolution` pixels (any size: the
+    /// vertical field of view is kept) at sub-pixel offset `jitter ∈ [0,1)²`; unit direction.
     #[inline]
-    pub fn ray(&self, pixel: UVec2, jitter: Vec2) -> Ray {
-        let res = self.resolution.as_vec2();
+    pub fn ray(&self, pixel: UVec2, resolution: UVec2, jitter: Vec2) -> Ray {
+        let res = resolution.as_vec2();
         let ndc = (pixel.as_vec2() + jitter) / res; // [0,1)², y down
         let aspect = res.x / res.y;
         let sx = (2.0 * ndc.x - 1.0) * self.tan_half_fov_y * aspect;
@@ -110,22 +89,22 @@ mod tests {
     #[test]
     fn centre_and_corners() {
         let res = UVec2::new(40, 30);
-        let cam = Camera::look_at(Vec3A::new(0.0, 1.0, 4.0), Vec3A::new(0.0, 1.0, 0.0), Vec3A::Y, 0.6, res).unwrap();
-        let c = cam.ray(UVec2::new(20, 15), Vec2::ZERO);
+        let cam = Camera::look_at(Vec3A::new(0.0, 1.0, 4.0), Vec3A::new(0.0, 1.0, 0.0), Vec3A::Y, 0.6).unwrap();
+        let c = cam.ray(UVec2::new(20, 15), res, Vec2::ZERO);
         assert!((c.dir - Vec3A::NEG_Z).length() < 1e-6);
         // Top edge of the image is yfov/2 above the axis.
-        let top = cam.ray(UVec2::new(20, 0), Vec2::ZERO);
+        let top = cam.ray(UVec2::new(20, 0), res, Vec2::ZERO);
         assert!((top.dir.y.atan2(-top.dir.z) - 0.3).abs() < 1e-5);
         // Pixel (0,0) is top-left.
-        let tl = cam.ray(UVec2::ZERO, Vec2::ZERO);
+        let tl = cam.ray(UVec2::ZERO, res, Vec2::ZERO);
         assert!(tl.dir.x < 0.0 && tl.dir.y > 0.0);
-        let e = Camera::look_at(Vec3A::ZERO, Vec3A::ZERO, Vec3A::Y, 0.6, res).unwrap_err();
+        let e = Camera::look_at(Vec3A::ZERO, Vec3A::ZERO, Vec3A::Y, 0.6).unwrap_err();
         assert!(e.contains("is at the target"), "{e}");
-        let e = Camera::look_at(Vec3A::ZERO, Vec3A::Y, Vec3A::Y, 0.6, res).unwrap_err();
+        let e = Camera::look_at(Vec3A::ZERO, Vec3A::Y, Vec3A::Y, 0.6).unwrap_err();
         assert!(e.contains("parallel") && e.contains("[0, 1, 0]"), "{e}");
-        let e = Camera::look_at(Vec3A::ZERO, Vec3A::X, Vec3A::Y, 3.5, res).unwrap_err();
+        let e = Camera::look_at(Vec3A::ZERO, Vec3A::X, Vec3A::Y, 3.5).unwrap_err();
         assert!(e.contains("200.5"), "{e}");
-        let e = Camera::look_at(Vec3A::splat(f32::INFINITY), Vec3A::X, Vec3A::Y, 0.6, res).unwrap_err();
+        let e = Camera::look_at(Vec3A::splat(f32::INFINITY), Vec3A::X, Vec3A::Y, 0.6).unwrap_err();
         assert!(e.contains("eye"), "{e}");
     }
 
@@ -133,9 +112,9 @@ mod tests {
     fn matrix_camera_matches_look_at() {
         let res = UVec2::new(8, 6);
         let m = Mat4::from_translation(glam::Vec3::new(0.0, 1.0, 4.4));
-        let a = Camera::from_matrix(&m, 0.6, res).unwrap();
-        let b = Camera::look_at(Vec3A::new(0.0, 1.0, 4.4), Vec3A::new(0.0, 1.0, 0.0), Vec3A::Y, 0.6, res).unwrap();
-        let (ra, rb) = (a.ray(UVec2::new(1, 2), Vec2::splat(0.3)), b.ray(UVec2::new(1, 2), Vec2::splat(0.3)));
+        let a = Camera::from_matrix(&m, 0.6).unwrap();
+        let b = Camera::look_at(Vec3A::new(0.0, 1.0, 4.4), Vec3A::new(0.0, 1.0, 0.0), Vec3A::Y, 0.6).unwrap();
+        let (ra, rb) = (a.ray(UVec2::new(1, 2), res, Vec2::splat(0.3)), b.ray(UVec2::new(1, 2), res, Vec2::splat(0.3)));
         assert!((ra.dir - rb.dir).length() < 1e-6);
     }
 }

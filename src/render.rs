@@ -45,6 +45,8 @@ pub struct RenderSettings {
     pub seed: u64,
     /// Maximum scattering events (1 = direct lighting only).
     pub max_depth: u32,
+    /// Image size in pixels (the camera keeps its vertical field of view at any size).
+    pub resolution: UVec2,
     /// Extra images to keep.
     pub aovs: AovSet,
 }
@@ -134,7 +136,7 @@ fn render_pass(
     count: u32,
     progress: Option<&dyn RenderObserver>,
 ) -> (RayCounters, u64) {
-    let size = scene.camera.resolution();
+    let size = settings.resolution;
     let bands: Vec<_> = film.bands_mut(ROWS_PER_BAND).collect();
     let results: Vec<(RayCounters, u64)> = bands
         .into_par_iter()
@@ -149,7 +151,7 @@ fn render_pass(
                 let pixel = UVec2::new(index as u32 % size.x, index as u32 / size.x);
                 for s in first..first + count {
                     let stream = SampleStream::new(settings.seed, index as u64, s as u64);
-                    let ray = scene.camera.ray(pixel, stream.get_2d(0, Dim::PixelJitter, 0));
+                    let ray = scene.camera.ray(pixel, size, stream.get_2d(0, Dim::PixelJitter, 0));
                     let smp = path::radiance(scene, strategy, ray, &stream, settings.max_depth, &mut counters);
                     if smp.radiance.is_finite() {
                         px.add(smp.radiance);
@@ -209,7 +211,7 @@ pub fn render(
     settings: &RenderSettings,
     observer: &mut dyn RenderObserver,
 ) -> RenderOutput {
-    let size = scene.camera.resolution();
+    let size = settings.resolution;
     let pixels = size.x as u64 * size.y as u64;
     let mut film = Film::new(size, settings.aovs.wants_first_hit());
     let mut stats = RenderStats::default();

@@ -119,7 +119,7 @@ fn reference_key(
     for input in &loaded.report.inputs {
         key.file(input)?;
     }
-    let size = loaded.scene.camera.resolution();
+    let size = loaded.report.resolution;
     key.value("gltf_scene", format!("{:?}", opts.load.gltf_scene))
         .value("punctual_scale", opts.load.punctual_scale.to_bits())
         .value("camera", opts.camera.as_deref().unwrap_or("-"))
@@ -134,8 +134,7 @@ fn reference_key(
 
 /// Loads the given reference, reuses a cached one, or renders and caches a new one.
 fn reference(opts: &CompareOptions, loaded: &LoadedScene, max_depth: u32) -> Result<Reference> {
-    let scene = &loaded.scene;
-    let size = scene.camera.resolution();
+    let (scene, size) = (&loaded.scene, loaded.report.resolution);
     if let Some(path) = &opts.reference {
         let ReferenceFile { pixels, variance, .. } = read_reference(path, size)?;
         let info =
@@ -155,7 +154,13 @@ fn reference(opts: &CompareOptions, loaded: &LoadedScene, max_depth: u32) -> Res
     }
     let strategy = LightStrategy::build(sampler, &scene.lights, scene.radius);
     let aovs = AovSet { variance: true, ..Default::default() };
-    let settings = RenderSettings { budget: Budget::Spp(opts.reference_spp), seed: REFERENCE_SEED, max_depth, aovs };
+    let settings = RenderSettings {
+        budget: Budget::Spp(opts.reference_spp),
+        seed: REFERENCE_SEED,
+        max_depth,
+        resolution: size,
+        aovs,
+    };
     let out = render(scene, &strategy, &settings, &mut Progress::new(opts.progress, "ref"));
     // A reference stopped short is not the reference its key describes.
     if out.stats.stopped != Stop::No {
@@ -181,6 +186,7 @@ struct Plan {
     samplers: Vec<LightSamplerKind>,
     budget: Budget,
     max_depth: u32,
+    resolution: UVec2,
     seeds: Vec<u64>,
 }
 
@@ -197,11 +203,12 @@ impl Plan {
             return Err(Error::Usage("give at least one sampler and one seed".into()));
         }
         let seeds = (1..=opts.seeds as u64).map(|k| seed.wrapping_add(k)).collect();
-        Ok(Self { samplers, budget, max_depth, seeds })
+        Ok(Self { samplers, budget, max_depth, resolution: report.resolution, seeds })
     }
 
     fn settings(&self, seed: u64) -> RenderSettings {
-        RenderSettings { budget: self.budget, seed, max_depth: self.max_depth, aovs: AovSet::default() }
+        let (budget, max_depth, resolution) = (self.budget, self.max_depth, self.resolution);
+        RenderSettings { budget, seed, max_depth, resolution, aovs: AovSet::default() }
     }
 
     /// The bias flag's level for one sampler: [`BIAS_ALPHA`] over all of them (Šidák).
@@ -232,7 +239,7 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
     let _busy = crate::interrupt::busy();
     crate::io::ensure_dir(&opts.out_dir)?;
     let reference = reference(opts, &loaded, plan.max_depth)?;
-    let size = scene.camera.resolution();
+    let size = plan.resolution;
     let mut columns = vec![SheetColumn {
         title: "reference".into(),
         caption: reference.info.origin.replacen(", seed", "\nseed", 1),
@@ -242,7 +249,7 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
     let mut results = Vec::new();
     for &kind in &plan.samplers {
         let runs = run_sampler(opts, &plan, scene, kind, &reference)?;
-        let (result, column) = record_sampler(opts, &plan, scene, runs, &reference)?;
+        let (result, column) = record_sampler(opts, &plan, runs, &reference)?;
         results.push(result);
         columns.push(column);
     }
@@ -390,11 +397,10 @@ impl SeedStatistics {
 fn record_sampler(
     opts: &CompareOptions,
     plan: &Plan,
-    scene: &Scene,
     s: SamplerRuns,
     reference: &Reference,
 ) -> Result<(SamplerResult, SheetColumn)> {
-    let size = scene.camera.resolution();
+    let size = plan.resolution;
     let pixels = s.first.means();
     let (exr, err_png) =
         (opts.out_dir.join(format!("{}.exr", s.kind)), opts.out_dir.join(format!("{}-error.png", s.kind)));

@@ -29,7 +29,7 @@ impl fmt::Display for InfoReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let (s, r) = (&self.loaded.scene, &self.loaded.report);
         let st = &r.stats;
-        let res = s.camera.resolution();
+        let res = r.resolution;
         writeln!(f, "scene        {}", r.source)?;
         writeln!(f, "camera       '{}', {} × {} px", r.camera_name, res.x, res.y)?;
         writeln!(

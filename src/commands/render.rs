@@ -102,7 +102,7 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
     };
     let loaded = load_scene(opts.scene.as_deref(), &scene_options)?;
     let resolved = opts.settings.resolve(&loaded.report.render, DEFAULT_SPP)?;
-    let (settings, sampler) = (resolved.render_settings(opts.aovs), resolved.sampler);
+    let (settings, sampler) = (resolved.render_settings(loaded.report.resolution, opts.aovs), resolved.sampler);
     let scene = &loaded.scene;
 
     let t = Instant::now();
@@ -111,7 +111,7 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
 
     let _busy = crate::interrupt::busy();
     if opts.progress {
-        let res = scene.camera.resolution();
+        let res = settings.resolution;
         let budget = match settings.budget {
             Budget::Spp(n) => format!("{n} spp"),
             Budget::Time(t) => format!("{} s", t.as_secs_f64()),

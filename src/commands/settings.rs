@@ -6,6 +6,7 @@ use std::time::Duration;
 
 use crate::error::{Error, Result};
 use crate::film::AovSet;
+use crate::math::UVec2;
 use crate::render::{Budget, RenderSettings};
 use crate::settings::{LightSamplerKind, RenderDefaults};
 
@@ -51,9 +52,9 @@ pub struct Resolved {
 }
 
 impl Resolved {
-    /// The settings of a render with these choices keeping `aovs`.
-    pub fn render_settings(&self, aovs: AovSet) -> RenderSettings {
-        RenderSettings { budget: self.budget, seed: self.seed, max_depth: self.max_depth, aovs }
+    /// The settings of a render with these choices of an image of `resolution` keeping `aovs`.
+    pub fn render_settings(&self, resolution: UVec2, aovs: AovSet) -> RenderSettings {
+        RenderSettings { budget: self.budget, seed: self.seed, max_depth: self.max_depth, resolution, aovs }
     }
 }
 

@@ -20,7 +20,7 @@ pub enum SpotCurve {
 /// A spot light of on-axis radiant intensity `intensity` [W/sr].
 #[derive(Clone, Debug)]
 pub struct SpotLight {
-    /// Position.
+    /// Position (metres).
     pub position: Vec3A,
     /// Unit direction the cone points to.
     pub direction: Vec3A,
@@ -49,24 +49,9 @@ impl SpotLight {
     /// The (delta) sample seen from `p`; `None` outside the cone.
     #[inline]
     pub fn sample_li(&self, p: Vec3A) -> Option<LightSample> {
-        let d = self.position - p;
-        let dist2 = d.length_squared();
-        if !(dist2 > 0.0) {
-            return None;
-        }
-        let dist = dist2.sqrt();
-        let wi = d / dist;
-        let f = self.falloff(self.direction.dot(-wi));
-        if f <= 0.0 {
-            return None;
-        }
-        Some(LightSample {
-            radiance: self.intensity * (f / dist2),
-            wi,
-            distance: dist,
-            pdf: 1.0,
-            p: self.position,
-            n: Vec3A::ZERO,
+        super::point::delta_sample(self.position, p, |wi, dist2| {
+            let f = self.falloff(self.direction.dot(-wi));
+            (f > 0.0).then(|| self.intensity * (f / dist2))
         })
     }
 

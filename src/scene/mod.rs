@@ -59,6 +59,9 @@ pub struct SceneReport {
     pub source: String,
     /// Name of the camera in use.
     pub camera_name: String,
+    /// The image size the command line, else the scene, asked for (else 640 wide at the
+    /// camera's aspect ratio); what renders of this scene use unless told otherwise.
+    pub resolution: crate::math::UVec2,
     /// Render settings the scene asked for.
     pub render: crate::settings::RenderDefaults,
     /// Counts and timings.
@@ -71,7 +74,7 @@ pub struct SceneReport {
 
 /// A scene ready to render: geometry, materials, lights and the camera, and nothing else.
 pub struct Scene {
-    /// The camera in use (with the output resolution).
+    /// The camera in use; the image size is a render setting.
     pub camera: Camera,
     /// Triangles and the BVH.
     pub geometry: Geometry,

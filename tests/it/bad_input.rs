@@ -270,8 +270,9 @@ fn impossible_material_values_are_errors_or_warnings_naming_the_material() {
                     "KHR_materials_volume": {"thicknessFactor": 1, "attenuationDistance": -1}}))(&mut doc);
     let path = dir.path().join("glass.gltf");
     std::fs::write(&path, doc.to_string()).unwrap();
-    let myriad::commands::LoadedScene { scene, report, .. } =
-        crate::common::load_report(&path, Some(UVec2::new(8, 6)), None).unwrap();
+    let loaded = crate::common::load_report(&path, Some(UVec2::new(8, 6)), None).unwrap();
+    let report = loaded.report.clone();
+    let scene = crate::common::TestScene::from(loaded);
     let name = &scene.materials[0].name;
     assert!(
         report

@@ -179,6 +179,25 @@ pub fn polygon_irradiance(p: Vec3A, n: Vec3A, corners: &[Vec3A], l: f64) -> f64 
     (0.5 * l * sum).abs()
 }
 
+/// A scene and the image size it was built for: what tests render. Derefs to the scene.
+pub struct TestScene {
+    pub scene: Scene,
+    pub resolution: UVec2,
+}
+
+impl From<myriad::commands::LoadedScene> for TestScene {
+    fn from(l: myriad::commands::LoadedScene) -> Self {
+        Self { resolution: l.report.resolution, scene: l.scene }
+    }
+}
+
+impl std::ops::Deref for TestScene {
+    type Target = Scene;
+    fn deref(&self) -> &Scene {
+        &self.scene
+    }
+}
+
 /// A scene from parts: the camera looks from `eye` to `target` at `resolution`.
 pub fn scene_from(
     materials: Vec<Material>,
@@ -187,7 +206,7 @@ pub fn scene_from(
     eye: Vec3A,
     target: Vec3A,
     resolution: UVec2,
-) -> Scene {
+) -> TestScene {
     let mut desc = SceneDescription { source: "<test>".into(), materials, lights, ..Default::default() };
     desc.cameras.push(CameraDesc {
         name: "test".into(),
@@ -203,7 +222,9 @@ pub fn scene_from(
         desc.meshes.push(mesh);
         desc.instances.push(InstanceDesc { mesh: i as u32, transform: m, name: format!("mesh {i}") });
     }
-    build(desc, &BuildOptions { resolution: Some(resolution), camera: None }).expect("test scene builds").0
+    let (scene, report) =
+        build(desc, &BuildOptions { resolution: Some(resolution), camera: None }).expect("test scene builds");
+    TestScene { scene, resolution: report.resolution }
 }
 
 /// A quad light from corner and edges.
@@ -298,8 +319,8 @@ pub fn cornell(ext: &str) -> PathBuf {
 }
 
 /// Loads and builds a scene file as `myriad render` does.
-pub fn load(path: &Path, resolution: Option<UVec2>, camera: Option<&str>) -> myriad::Result<Scene> {
-    load_report(path, resolution, camera).map(|l| l.scene)
+pub fn load(path: &Path, resolution: Option<UVec2>, camera: Option<&str>) -> myriad::Result<TestScene> {
+    load_report(path, resolution, camera).map(TestScene::from)
 }
 
 /// Loads a scene file as the binary does: the scene with its build report.

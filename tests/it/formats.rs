@@ -45,7 +45,7 @@ fn blender_exports_load_with_the_counts_of_their_readme() {
         );
         assert_eq!(light_kinds(&scene), lights.iter().copied().collect(), "{file}");
         assert_eq!(st.cameras, ["Camera"], "{file}");
-        assert_eq!(scene.camera.resolution(), UVec2::new(640, 480), "{file}: 4:3 from aspectRatio");
+        assert_eq!(report.resolution, UVec2::new(640, 480), "{file}: 4:3 from aspectRatio");
         assert!(report.warnings.is_empty(), "{file}: {:?}", report.warnings);
     }
     // One emissive box mesh placed 400 times: each placement is 12 lights of its own, and the
@@ -115,8 +115,9 @@ fn one_cornell_box_as_ron_obj_and_gltf_renders_alike() {
         .iter()
         .zip(1u64..)
         .map(|(ext, seed)| {
-            let LoadedScene { scene, report, .. } = load_report(&cornell(ext), size, Some(AUTO_CAMERA)).unwrap();
-            assert_eq!(report.stats.triangles, 32, "{ext}");
+            let loaded = load_report(&cornell(ext), size, Some(AUTO_CAMERA)).unwrap();
+            assert_eq!(loaded.report.stats.triangles, 32, "{ext}");
+            let scene = crate::common::TestScene::from(loaded);
             assert!((scene.total_power() - 9.806).abs() < 1e-2, "{ext}: {} W", scene.total_power());
             (ext, render_with(&scene, LightSamplerKind::Tree, 64, 8, seed))
         })

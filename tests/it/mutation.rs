@@ -367,10 +367,12 @@ fn exercise(path: &Path) -> myriad::Result<()> {
         load: Default::default(),
         build: BuildOptions { resolution: Some(UVec2::new(4, 3)), camera: obj.then(|| AUTO_CAMERA.to_string()) },
     };
-    let scene = load_scene(Some(path), &options)?.scene;
+    let loaded = load_scene(Some(path), &options)?;
+    let (scene, resolution) = (loaded.scene, loaded.report.resolution);
     for kind in [LightSamplerKind::Tree, LightSamplerKind::Power] {
         let strategy = LightStrategy::build(kind, &scene.lights, scene.radius);
-        let settings = RenderSettings { budget: Budget::Spp(1), seed: 1, max_depth: 3, aovs: Default::default() };
+        let settings =
+            RenderSettings { budget: Budget::Spp(1), seed: 1, max_depth: 3, resolution, aovs: Default::default() };
         render(&scene, &strategy, &settings, &mut ());
     }
     Ok(())

@@ -1,23 +1,24 @@
 //! Image-level tests: analytic direct lighting, analytic enclosures, agreement between
 //! samplers on a real scene, and determinism across thread counts.
 
-use crate::common::{polygon_irradiance, quad_light, scene_from, sidak, z_p_value};
+use crate::common::{TestScene, polygon_irradiance, quad_light, scene_from, sidak, z_p_value};
 use myriad::commands::load_scene;
 use myriad::film::Film;
 use myriad::light_sampler::LightStrategy;
 use myriad::material::Material;
 use myriad::math::{Mat4, Rgb, UVec2, Vec2, Vec3A};
 use myriad::render::{Budget, OnPass, RenderSettings, render};
+use myriad::scene::BuildOptions;
 use myriad::scene::description::LightDesc;
 use myriad::scene::shapes::{box_mesh, quad_mesh};
-use myriad::scene::{BuildOptions, Scene};
 use myriad::settings::LightSamplerKind;
 
 pub const ALL_KINDS: [LightSamplerKind; 5] = LightSamplerKind::EVERY;
 
-pub fn render_with(scene: &Scene, kind: LightSamplerKind, spp: u32, max_depth: u32, seed: u64) -> Film {
+pub fn render_with(scene: &TestScene, kind: LightSamplerKind, spp: u32, max_depth: u32, seed: u64) -> Film {
     let strategy = LightStrategy::build(kind, &scene.lights, scene.radius);
-    let settings = RenderSettings { budget: Budget::Spp(spp), seed, max_depth, aovs: Default::default() };
+    let resolution = scene.resolution;
+    let settings = RenderSettings { budget: Budget::Spp(spp), seed, max_depth, resolution, aovs: Default::default() };
     render(scene, &strategy, &settings, &mut ()).film
 }
 
@@ -95,7 +96,7 @@ fn direct_light_under_quads_matches_lambert_formula() {
             let mut acc = 0.0;
             for s in 0..64 {
                 let j = Vec2::new(((s % 8) as f32 + 0.5) / 8.0, ((s / 8) as f32 + 0.5) / 8.0);
-                let ray = scene.camera.ray(pixel, j);
+                let ray = scene.camera.ray(pixel, res, j);
                 let t = -ray.origin.y / ray.dir.y;
                 acc += irradiance(ray.at(t));
             }
@@ -203,7 +204,7 @@ fn scene_path(name: &str) -> std::path::PathBuf {
 #[test]
 fn samplers_agree_on_cornell_9x9() {
     let opts = BuildOptions { resolution: Some(UVec2::new(32, 24)), camera: None };
-    let scene = load_scene(Some(&scene_path("cornell-9x9.ron")), &opts.clone().into()).unwrap().scene;
+    let scene = TestScene::from(load_scene(Some(&scene_path("cornell-9x9.ron")), &opts.clone().into()).unwrap());
     let reference = render_with(&scene, LightSamplerKind::All, 64, 3, 11);
     let kinds = &ALL_KINDS[1..];
     let alpha = sidak(kinds.len());
@@ -234,7 +235,7 @@ fn same_seed_gives_identical_pixels_for_any_thread_count() {
         .map(|&threads| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             pool.install(|| {
-                let scene = load_scene(None, &opts.clone().into()).unwrap().scene;
+                let scene = TestScene::from(load_scene(None, &opts.clone().into()).unwrap());
                 render_with(&scene, LightSamplerKind::Power, 8, 8, 42)
             })
         })
@@ -251,7 +252,7 @@ fn same_seed_gives_identical_pixels_for_any_thread_count() {
         }
     }
     // A different seed gives a different image.
-    let scene = load_scene(None, &opts.clone().into()).unwrap().scene;
+    let scene = TestScene::from(load_scene(None, &opts.clone().into()).unwrap());
     let other = render_with(&scene, LightSamplerKind::Power, 8, 8, 43);
     assert!((0..24 * 18).any(|i| other.mean(i) != films[0].mean(i)));
 }
@@ -264,7 +265,9 @@ fn pass_boundaries_do_not_change_pixels() {
     let opts = BuildOptions { resolution: Some(UVec2::new(8, 6)), camera: None };
     let scene = load_scene(None, &opts.clone().into()).unwrap().scene;
     let strategy = LightStrategy::build(LightSamplerKind::Uniform, &scene.lights, scene.radius);
-    let settings = RenderSettings { budget: Budget::Spp(8), seed: 9, max_depth: 4, aovs: Default::default() };
+    let resolution = UVec2::new(8, 6);
+    let settings =
+        RenderSettings { budget: Budget::Spp(8), seed: 9, max_depth: 4, resolution, aovs: Default::default() };
     let mut passes = Vec::new();
     render(&scene, &strategy, &settings, &mut OnPass(|f: &myriad::film::Film, _| passes.push(f.spp())));
     assert_eq!(passes, [1, 2, 4, 8]);
@@ -277,4 +280,22 @@ fn pass_boundaries_do_not_change_pixels() {
     for i in 0..48 {
         assert_eq!(out.film.mean(i), again.mean(i), "pixel {i}");
     }
+}
+
+#[test]
+fn the_image_size_is_a_render_setting_not_part_of_the_scene() {
+    // A scene built for 8 × 6 renders at 16 × 12 exactly as one built for 16 × 12 does.
+    let built = |w, h| {
+        let opts = BuildOptions { resolution: Some(UVec2::new(w, h)), camera: None };
+        load_scene(None, &opts.into()).unwrap().scene
+    };
+    let (small, large) = (built(8, 6), built(16, 12));
+    let strategy = LightStrategy::build(LightSamplerKind::Power, &small.lights, small.radius);
+    let resolution = UVec2::new(16, 12);
+    let settings =
+        RenderSettings { budget: Budget::Spp(4), seed: 3, max_depth: 4, resolution, aovs: Default::default() };
+    let a = render(&small, &strategy, &settings, &mut ()).film;
+    let b = render(&large, &strategy, &settings, &mut ()).film;
+    assert_eq!(a.size(), resolution);
+    assert_eq!(a.means(), b.means());
 }

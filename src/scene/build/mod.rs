@@ -64,6 +64,13 @@ fn choose_camera<'a>(desc: &'a SceneDescription, opts: &BuildOptions) -> Result<
 /// The image size: the options', else the scene's, else 640 wide at the camera's aspect ratio.
 fn resolution(desc: &SceneDescription, opts: &BuildOptions, camera: Option<&CameraDesc>) -> Result<UVec2> {
     if let Some(r) = opts.resolution.or(desc.resolution) {
+        if r.min_element() == 0 || r.max_element() > MAX_RESOLUTION {
+            return Err(Error::scene(
+                &desc.source,
+                "resolution",
+                format!("{} × {} is not a usable image size (1 to {MAX_RESOLUTION} per side)", r.x, r.y),
+            ));
+        }
         return Ok(r);
     }
     let Some((name, aspect)) = camera.and_then(|c| Some((&c.name, c.aspect_ratio?))) else {
@@ -167,7 +174,7 @@ pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<(Scene, Scen
         None => None,
     };
     let (camera, camera_name) = match cam_desc {
-        Some(c) => (scene_camera(file, c, resolution)?, c.name.clone()),
+        Some(c) => (scene_camera(file, c)?, c.name.clone()),
         None => (auto_camera(file, center, radius, resolution)?, AUTO_CAMERA.to_string()),
     };
     let mut warnings = desc.warnings.clone();
@@ -180,6 +187,7 @@ pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<(Scene, Scen
     let report = SceneReport {
         source: desc.source.clone(),
         camera_name,
+        resolution,
         render: desc.render,
         stats,
         warnings,
@@ -225,23 +233,24 @@ pub const AUTO_CAMERA: &str = "auto";
 /// The field of view of the `auto` camera, in degrees.
 const AUTO_YFOV_DEG: f32 = 40.0;
 
-/// A scene camera at the given resolution, or an error naming it and saying what is wrong.
-fn scene_camera(file: &str, c: &CameraDesc, resolution: UVec2) -> Result<Camera> {
+/// A scene camera, or an error naming it and saying what is wrong.
+fn scene_camera(file: &str, c: &CameraDesc) -> Result<Camera> {
     match c.placement {
-        CameraPlacement::LookAt { eye, target, up } => Camera::look_at(eye, target, up, c.yfov, resolution),
-        CameraPlacement::Matrix(m) => Camera::from_matrix(&m, c.yfov, resolution),
+        CameraPlacement::LookAt { eye, target, up } => Camera::look_at(eye, target, up, c.yfov),
+        CameraPlacement::Matrix(m) => Camera::from_matrix(&m, c.yfov),
     }
     .map_err(|m| Error::scene(file, format!("camera '{}'", c.name), format!("cannot be used: {m}")))
 }
 
 /// A camera on +Z looking down −Z at the centre of the scene's bounding sphere, slightly from
-/// above, far enough back that the whole sphere fits the narrower field of view.
+/// above, far enough back that the whole sphere fits the narrower field of view of an image
+/// of `resolution`.
 fn auto_camera(file: &str, center: Vec3A, radius: f32, resolution: UVec2) -> Result<Camera> {
     let yfov = AUTO_YFOV_DEG.to_radians();
     let aspect = resolution.x as f32 / resolution.y as f32;
     let half = (0.5 * yfov).tan().min((0.5 * yfov).tan() * aspect).atan();
     let distance = radius / half.sin();
     let dir = Vec3A::new(0.0, 0.25, 1.0).normalize();
-    Camera::look_at(center + distance * dir, center, Vec3A::Y, yfov, resolution)
+    Camera::look_at(center + distance * dir, center, Vec3A::Y, yfov)
         .map_err(|m| Error::scene(file, "--camera auto", format!("cannot frame the scene: {m}")))
 }
