@@ -3,7 +3,7 @@
 //! pbrt-v4's `PathIntegrator` structure. At every vertex: add emission (MIS-weighted against
 //! NEE when the vertex was found by BSDF sampling), stop at `max_depth` scattering events
 //! (1 = direct lighting only), estimate direct light, sample the BSDF, apply Russian roulette
-//! from the third vertex on. Every random number is addressed by (bounce, `Dim`), so the
+//! after three scattering events. Every random number is addressed by (bounce, `Dim`), so the
 //! choices of one decision never shift another's numbers.
 
 use super::RayCounters;
@@ -36,8 +36,12 @@ impl FirstHit {
     }
 }
 
-/// Russian roulette starts at this depth (after two scattering events), as in pbrt-v4.
-const RR_MIN_DEPTH: u32 = 2;
+/// Russian roulette starts once this many scattering events are behind the path. Measured
+/// on cornell_grid_7.glb (320×240, 64 spp, 9 events, against Cycles' 1024-spp render): with
+/// survival max(β) from 2 events, relMSE 0.0079 in 6.0 CPU s; with √max(β) from 3 events,
+/// 0.0050 in 7.2 s (1.3× the efficiency); without roulette, 0.0037 in 11.6 s.
+const RR_MIN_DEPTH: u32 = 3;
+
 
 /// What one camera path found.
 #[derive(Clone, Copy, Debug)]
@@ -98,13 +102,15 @@ fn emitted(
 }
 
 /// Russian roulette from [`RR_MIN_DEPTH`] on: a path survives with probability
-/// min(1, max(beta)) and carries `beta` divided by it; false when it ends.
+/// min(1, √max(beta)) and carries `beta` divided by it; false when it ends. The square root
+/// (Cycles' rule) ends dim paths less eagerly than max(beta) would: the variance a
+/// terminated path's survivors carry costs more than the extra bounces.
 #[inline]
 fn survives_roulette(stream: &SampleStream, depth: u32, beta: &mut Rgb) -> bool {
     if depth < RR_MIN_DEPTH {
         return true;
     }
-    let survive = beta.max_element().min(1.0);
+    let survive = beta.max_element().sqrt().min(1.0);
     if stream.get_1d(depth, Dim::RussianRoulette, 0) >= survive {
         return false;
     }
