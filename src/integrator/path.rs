@@ -42,7 +42,6 @@ impl FirstHit {
 /// 0.0050 in 7.2 s (1.3× the efficiency); without roulette, 0.0037 in 11.6 s.
 const RR_MIN_DEPTH: u32 = 3;
 
-
 /// What one camera path found.
 #[derive(Clone, Copy, Debug)]
 pub struct PathSample {

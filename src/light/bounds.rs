@@ -154,17 +154,22 @@ impl BoundsPacket {
         let inv_dist = Vec4::select(dist2.cmpgt(Vec4::ZERO), sqrt4(dist2).recip(), Vec4::ZERO);
         // Unit direction from the cluster towards p.
         let (wix, wiy, wiz) = (dx * inv_dist, dy * inv_dist, dz * inv_dist);
-        // Half-angle subtended by the bounding sphere (θb = π inside it).
+        // Half-angle subtended by the bounding sphere (θb = π inside it): sin θb = r/d.
         let inside = dist2.cmple(self.r2);
-        let sin_b2 = Vec4::select(inside, Vec4::ONE, self.r2 * inv_dist * inv_dist);
-        let cos_b = Vec4::select(inside, Vec4::NEG_ONE, sqrt4((Vec4::ONE - sin_b2).max(Vec4::ZERO)));
-        let sin_b = Vec4::select(inside, Vec4::ZERO, sqrt4(sin_b2));
+        let sin_b = Vec4::select(inside, Vec4::ZERO, sqrt4(self.r2) * inv_dist);
+        let cos_b = Vec4::select(inside, Vec4::NEG_ONE, sqrt4((Vec4::ONE - sin_b * sin_b).max(Vec4::ZERO)));
         let mut cos_w = self.wx * wix + self.wy * wiy + self.wz * wiz;
         cos_w = Vec4::select(self.two_sided, cos_w.abs(), cos_w);
         // θ' = max(0, θw − θo − θb): the smallest angle between an emitter normal and the
-        // direction towards p.
-        let cos_x = cos_sub_clamped4(cos_w, sin_from_cos4(cos_w), self.cos_o, self.sin_o);
-        let cos_p = cos_sub_clamped4(cos_x, sin_from_cos4(cos_x), cos_b, sin_b);
+        // direction towards p. sin(θw − θo) comes from the difference formula, not a root.
+        let sin_w = sin_from_cos4(cos_w);
+        let cos_x = cos_sub_clamped4(cos_w, sin_w, self.cos_o, self.sin_o);
+        let sin_x = Vec4::select(
+            cos_w.cmpge(self.cos_o),
+            Vec4::ZERO,
+            (sin_w * self.cos_o - cos_w * self.sin_o).max(Vec4::ZERO),
+        );
+        let cos_p = cos_sub_clamped4(cos_x, sin_x, cos_b, sin_b);
         let mut importance = Vec4::select(cos_p.cmpgt(self.cos_e), self.phi * cos_p / d2, Vec4::ZERO);
         // Directional lanes: irradiance times the best cosine over the cone of directions.
         let mut infinite = self.phi;
@@ -174,8 +179,11 @@ impl BoundsPacket {
             let cos_i = -(nx * wix + ny * wiy + nz * wiz);
             let cos_ip = cos_sub_clamped4(cos_i, sin_from_cos4(cos_i), cos_b, sin_b);
             importance *= cos_ip.max(Vec4::ZERO);
-            let cos_n = nx * self.wx + ny * self.wy + nz * self.wz;
-            infinite *= cos_sub_clamped4(cos_n, sin_from_cos4(cos_n), self.cos_o, self.sin_o).max(Vec4::ZERO);
+            if self.infinite.any() {
+                let cos_n = nx * self.wx + ny * self.wy + nz * self.wz;
+                let cos_np = cos_sub_clamped4(cos_n, sin_from_cos4(cos_n), self.cos_o, self.sin_o);
+                infinite *= cos_np.max(Vec4::ZERO);
+            }
         }
         Vec4::select(self.infinite, infinite, importance)
     }
