@@ -142,7 +142,8 @@ impl GeometryBuilder {
             blases.push(blas);
         }
         let accel = Accel::new(blases, &self.placements, start.elapsed());
-        Geometry { accel, info: infos, normals: self.normals, uvs: self.uvs }
+        let masked = infos.iter().flatten().any(|i| i.masked);
+        Geometry { accel, info: infos, normals: self.normals, uvs: self.uvs, masked }
     }
 }
 
@@ -154,6 +155,9 @@ pub struct Geometry {
     info: Vec<Vec<TriangleInfo>>,
     normals: Vec<Vec3A>,
     uvs: Vec<Vec2>,
+    /// Whether any triangle is alpha-masked; without one, traversal asks nothing per
+    /// candidate hit (its shading record would be a memory access per triangle tested).
+    masked: bool,
 }
 
 impl Geometry {
@@ -204,10 +208,14 @@ impl Geometry {
     /// about hits on alpha-masked triangles; true lets the ray pass.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32, cut_out: impl Fn(u32, Vec2) -> bool) -> Option<SurfaceHit> {
-        let raw = self.accel.closest_hit(ray, t_max, |blas, tri, b1, b2| {
-            let info = self.info(blas, tri);
-            !info.masked || !cut_out(info.material, self.uv_at(info, b1, b2))
-        })?;
+        let raw = if self.masked {
+            self.accel.closest_hit(ray, t_max, |blas, tri, b1, b2| {
+                let info = self.info(blas, tri);
+                !info.masked || !cut_out(info.material, self.uv_at(info, b1, b2))
+            })
+        } else {
+            self.accel.closest_hit(ray, t_max, |_, _, _, _| true)
+        }?;
         let inst = &self.accel.instances()[raw.instance as usize];
         let [v0, v1, v2] = world_vertices(inst, self.accel.blases()[inst.blas as usize].vertices(raw.tri));
         let (b1, b2) = (raw.b1, raw.b2);
@@ -248,6 +256,9 @@ impl Geometry {
     /// `origin + dir·t_max`.
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32, cut_out: impl Fn(u32, Vec2) -> bool) -> bool {
+        if !self.masked {
+            return self.accel.occluded(ray, t_max, |_, _, _, _| true);
+        }
         self.accel.occluded(ray, t_max, |blas, tri, b1, b2| {
             let info = self.info(blas, tri);
             !info.masked || !cut_out(info.material, self.uv_at(info, b1, b2))
