@@ -64,12 +64,25 @@ pub fn transmittance(sigma: Rgb, distance: f32) -> Rgb {
 fn escaped(scene: &Scene, strategy: &LightStrategy, dir: Vec3A, prev: Option<(ShadingContext, f32)>) -> Rgb {
     let Some(id) = scene.environment else { return Rgb::ZERO };
     let Light::Environment(env) = &scene.lights[id as usize] else { unreachable!("the environment index") };
-    let le = env.radiance_from(dir);
-    let weight = match prev {
+    env.radiance_from(dir) * bsdf_hit_weight(strategy, id, prev, |_| env.pdf(dir))
+}
+
+/// The MIS weight of light `id` reached by a BSDF-sampled ray from `prev` (1 for a camera
+/// ray), against next-event estimation there, which would have sampled the same direction
+/// with density `light_pdf(prev)` once the light was chosen.
+#[inline]
+fn bsdf_hit_weight(
+    strategy: &LightStrategy,
+    id: u32,
+    prev: Option<(ShadingContext, f32)>,
+    light_pdf: impl FnOnce(&ShadingContext) -> f32,
+) -> f32 {
+    match prev {
         None => 1.0,
-        Some((ctx, bsdf_pdf)) => power_heuristic(bsdf_pdf, selection_pmf(strategy, &ctx, LightId(id)) * env.pdf(dir)),
-    };
-    le * weight
+        Some((ctx, bsdf_pdf)) => {
+            power_heuristic(bsdf_pdf, selection_pmf(strategy, &ctx, LightId(id)) * light_pdf(&ctx))
+        }
+    }
 }
 
 /// What the light `id` emitting at `hit` back along `dir` adds to a path of throughput
@@ -90,14 +103,7 @@ fn emitted(
     if le == Rgb::ZERO {
         return le;
     }
-    let weight = match prev {
-        None => 1.0,
-        Some((ctx, bsdf_pdf)) => {
-            let pmf = selection_pmf(strategy, &ctx, LightId(id));
-            power_heuristic(bsdf_pdf, pmf * light.pdf_li(ctx.p, hit.p, hit.n_geom))
-        }
-    };
-    beta * le * weight
+    beta * le * bsdf_hit_weight(strategy, id, prev, |ctx| light.pdf_li(ctx.p, hit.p, hit.n_geom))
 }
 
 /// Russian roulette from [`RR_MIN_DEPTH`] on: a path survives with probability

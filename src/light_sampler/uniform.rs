@@ -5,7 +5,7 @@
 
 use super::{LightSampler, SampledLight, ShadingContext};
 use crate::light::LightId;
-use crate::math::distribution::{RANGE, probability};
+use crate::math::distribution::{RANGE, even_cell, even_pick, probability};
 
 /// Picks each of `n` lights with probability 1/n.
 #[derive(Clone, Debug)]
@@ -19,24 +19,19 @@ impl UniformSampler {
         assert!(n > 0 && n <= u32::MAX as usize, "uniform sampler needs 1..2^32 lights");
         Self { n: n as u32 }
     }
-
-    /// The first value of `u` that picks light `i` (`i = n` gives the end of the range).
-    #[inline]
-    fn start(&self, i: u32) -> u128 {
-        (i as u128 * RANGE).div_ceil(self.n as u128)
-    }
 }
 
 impl LightSampler for UniformSampler {
     #[inline]
     fn sample(&self, _ctx: &ShadingContext, u: u64) -> Option<SampledLight> {
-        let i = ((u as u128 * self.n as u128) >> 64) as u32;
-        Some(SampledLight { light: LightId(i), pmf: probability(self.start(i + 1) - self.start(i)) })
+        let i = even_pick(u as u128, self.n, RANGE);
+        let (start, end) = even_cell(i, self.n, RANGE);
+        Some(SampledLight { light: LightId(i), pmf: probability(end - start) })
     }
 
     #[inline]
     fn cell(&self, _ctx: &ShadingContext, light: LightId) -> (u128, u128) {
         debug_assert!(light.0 < self.n);
-        (self.start(light.0), self.start(light.0 + 1))
+        even_cell(light.0, self.n, RANGE)
     }
 }

@@ -28,6 +28,21 @@ pub fn probability(width: u128) -> f32 {
     (w * (1.0 / RANGE as f64)) as f32
 }
 
+/// The cell of entry `k` when `range` values are shared equally among `m` entries:
+/// `⌈k·range/m⌉ .. ⌈(k+1)·range/m⌉`, so every entry owns ⌊range/m⌋ or ⌈range/m⌉ values.
+#[inline]
+pub fn even_cell(k: u32, m: u32, range: u128) -> (u128, u128) {
+    let start = |k: u32| (k as u128 * range).div_ceil(m as u128);
+    (start(k), start(k + 1))
+}
+
+/// The entry whose [`even_cell`] holds `u` (`u < range`): ⌊u·m/range⌋.
+#[inline]
+pub fn even_pick(u: u128, m: u32, range: u128) -> u32 {
+    // The whole range is 2⁶⁴: a shift, not a 128-bit division.
+    if range == RANGE { ((u * m as u128) >> 64) as u32 } else { (u * m as u128 / range) as u32 }
+}
+
 /// Sharing `range` values among a sequence of weights, one cell after another.
 #[derive(Clone, Copy, Debug)]
 pub struct Split {

@@ -34,7 +34,7 @@ use self::compact::{Node, Quantizer};
 use super::{LightSampler, SampledLight, ShadingContext, prefetch};
 use crate::light::{Light, LightId};
 use crate::math::Vec3A;
-use crate::math::distribution::{RANGE, Split, probability};
+use crate::math::distribution::{RANGE, Split, even_cell, even_pick, probability};
 
 /// Children per node.
 const WIDTH: usize = 4;
@@ -128,12 +128,6 @@ fn runs(nodes: &[Node], phi: &[f32]) -> (Vec<(u32, u32)>, Vec<u32>, Vec<u32>) {
         rank[l as usize] = r as u32;
     }
     (spans, order, rank)
-}
-
-/// The first of the `range` values that choose the `k`-th of `m` lights uniformly.
-#[inline]
-fn uniform_start(k: u32, m: u32, range: u128) -> u128 {
-    (k as u128 * range).div_ceil(m as u128)
 }
 
 impl LightTree {
@@ -234,8 +228,9 @@ impl LightTree {
             }
             let (imp, mut split) = children_split(n, &self.grid, ctx, range)?;
             if let Some(m) = self.flat(node, &imp) {
-                let k = ((u * m as u128) / range) as u32;
-                let width = uniform_start(k + 1, m, range) - uniform_start(k, m, range);
+                let k = even_pick(u, m, range);
+                let (a, b) = even_cell(k, m, range);
+                let width = b - a;
                 let light = self.order[(self.spans[node].0 + k) as usize];
                 return Some(SampledLight { light: LightId(light), pmf: probability(width) });
             }
@@ -273,7 +268,8 @@ impl LightSampler for LightTree {
             let Some((imp, mut split)) = children_split(n, &self.grid, ctx, range) else { return (start, start) };
             if let Some(m) = self.flat(node, &imp) {
                 let k = self.rank[light.0 as usize] - self.spans[node].0;
-                return (start + uniform_start(k, m, range), start + uniform_start(k + 1, m, range));
+                let (a, b) = even_cell(k, m, range);
+                return (start + a, start + b);
             }
             let (a, b) = imp[..=k].iter().map(|&w| split.next(w)).last().expect("k < WIDTH");
             (start, range) = (start + a, b - a);

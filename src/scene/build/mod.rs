@@ -143,16 +143,17 @@ fn check_size(desc: &SceneDescription, placements: &[(Vec<Placement>, bool)], re
 /// Validates `desc` and builds the scene (BVH built in the current rayon pool): validate →
 /// camera and size → memory check → place meshes → listed lights → BVH → bounds →
 /// directional powers and the environment → camera.
-pub fn build(desc: SceneDescription, opts: &BuildOptions) -> Result<(Scene, SceneReport)> {
+pub fn build(mut desc: SceneDescription, opts: &BuildOptions) -> Result<(Scene, SceneReport)> {
     let start = Instant::now();
-    let file = desc.source.as_str();
     validate::description(&desc)?;
+    // The images move into the scene (textures can be large: no copy).
+    let images = std::mem::take(&mut desc.images);
+    let file = desc.source.as_str();
     let cam_desc = choose_camera(&desc, opts)?;
     let resolution = resolution(&desc, opts, cam_desc)?;
     let placements = placements(&desc);
     check_size(&desc, &placements, resolution)?;
 
-    let images = desc.images.clone();
     let mut placer = Placer::new(&desc, &images);
     placer.place_meshes(&placements)?;
     let listed = placer.lights.len();
