@@ -185,7 +185,6 @@ pub fn load_meshes(path: &Path) -> Result<LoadedMeshes> {
             uvs,
             triangles,
             material,
-            quads: false,
         });
     }
     Ok(out)

@@ -86,9 +86,6 @@ pub struct MeshDesc {
     pub triangles: Vec<[u32; 3]>,
     /// Material index.
     pub material: u32,
-    /// Triangles `2k, 2k+1` form parallelogram `k` (corners a,b,c and a,c,d): an emissive
-    /// material then makes one quad light per pair instead of two triangle lights.
-    pub quads: bool,
 }
 
 /// One placement of a mesh.

@@ -12,14 +12,13 @@ use crate::limits::{BYTES_PER_LIGHT, BYTES_PER_TRIANGLE, check_memory};
 use crate::math::{Rgb, Vec3A, luminance};
 use crate::sampling::fmix64;
 
-/// A parallelogram as a two-triangle mesh (`quads: true`).
+/// A parallelogram as a two-triangle mesh (emissive, it becomes one quad light).
 pub fn quad_mesh(name: &str, corner: Vec3A, edge1: Vec3A, edge2: Vec3A, material: u32) -> MeshDesc {
     MeshDesc {
         name: name.to_string(),
         positions: vec![corner, corner + edge1, corner + edge1 + edge2, corner + edge2],
         triangles: vec![[0, 1, 2], [0, 2, 3]],
         material,
-        quads: true,
         ..Default::default()
     }
 }
@@ -27,7 +26,7 @@ pub fn quad_mesh(name: &str, corner: Vec3A, edge1: Vec3A, edge2: Vec3A, material
 /// An axis-aligned box of edge lengths `size` centred at the origin, faces pointing out.
 pub fn box_mesh(name: &str, size: Vec3A, material: u32) -> MeshDesc {
     let h = size * 0.5;
-    let mut mesh = MeshDesc { name: name.to_string(), material, quads: true, ..Default::default() };
+    let mut mesh = MeshDesc { name: name.to_string(), material, ..Default::default() };
     // For each axis and sign: the face's centre offset and two edges whose cross is outward.
     for axis in 0..3 {
         for sign in [-1.0f32, 1.0] {
@@ -109,7 +108,6 @@ pub fn sphere_mesh(name: &str, center: Vec3A, radius: f32, subdivisions: u32, ma
         uvs: None,
         triangles: tris,
         material,
-        quads: false,
     }
 }
 

@@ -71,11 +71,11 @@ fn obj_meshes_load_with_transform_and_materials() {
     let text = scene(r#"objects: [ Mesh(path: "tri.obj", transform: (translate: (0, 0, -1), scale: (2, 2, 2))) ],"#);
     let (s, report) = built(&text, dir.path()).unwrap();
     assert_eq!(report.stats.triangles, 2);
-    assert_eq!(s.lights.len(), 2, "a polygon with Ke becomes emissive triangles");
-    let Light::Triangle(t) = &s.lights[0] else { panic!() };
-    assert!((t.area - 2.0).abs() < 1e-5, "scaled by 2: {}", t.area);
-    assert!(t.v.iter().all(|v| v.z == -1.0));
-    assert_eq!(t.emission.radiance, myriad::math::Rgb::new(2.0, 1.0, 0.5));
+    assert_eq!(s.lights.len(), 1, "a parallelogram with Ke becomes one quad light");
+    let Light::Quad(q) = &s.lights[0] else { panic!() };
+    assert!((q.area - 4.0).abs() < 1e-5, "scaled by 2: {}", q.area);
+    assert!([q.p0, q.p0 + q.e1, q.p0 + q.e2].iter().all(|v| v.z == -1.0));
+    assert_eq!(q.emission.radiance, myriad::math::Rgb::new(2.0, 1.0, 0.5));
 
     // Without its .mtl the mesh loads grey, with a warning that says so.
     std::fs::remove_file(dir.path().join("tri.mtl")).unwrap();

@@ -416,7 +416,7 @@ impl Loader<'_> {
         // Strips restart with repeated indices: drop those empty triangles.
         let triangles = triangles.into_iter().filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]).collect();
         let material = prim.material().index().map_or(default_material, |i| i as u32);
-        Ok(MeshDesc { name: where_.to_string(), positions, normals, uvs, triangles, material, quads: false })
+        Ok(MeshDesc { name: where_.to_string(), positions, normals, uvs, triangles, material })
     }
 
     fn nodes(&mut self, doc: &gltf::Document, primitives: &[Vec<Option<u32>>], options: &LoadOptions) -> Result<()> {

@@ -167,34 +167,26 @@ impl<'a> Placer<'a> {
         let (emissive, masked) = (material.is_emissive(), material.has_alpha());
         let corners = |t: [u32; 3]| if flip { [t[0], t[2], t[1]] } else { t };
         self.stats.instances += 1;
-        if emissive && mesh.quads {
-            for pair in mesh.triangles.chunks_exact(2) {
-                let [a, b, _] = pair[0].map(|i| positions[i as usize]);
-                let d = positions[pair[1][2] as usize];
-                let (e1, e2) = if flip { (d - a, b - a) } else { (b - a, d - a) };
-                let triangles = [pair[0], pair[1]].map(|t| (corners(t).map(|i| positions[i as usize]), corners(t)));
-                match QuadLight::new(a, e1, e2, emission) {
-                    Some(q) => {
-                        let id = self.add_light(mesh, name, Light::Quad(q))?;
-                        self.push_quad(id, triangles, attr, mesh.material, masked);
-                    }
-                    None => {
-                        self.degenerate_emitters += 2;
-                        for (corners, indices) in triangles {
-                            self.geo.push_triangle(corners, indices, attr, mesh.material, NO_LIGHT, masked);
-                        }
-                    }
-                }
+        // Emissive triangles pair into quad lights where consecutive ones make a
+        // parallelogram of one emission (a textured one varies over each triangle).
+        let pairs = emissive && material.emission_texture.is_none();
+        let place = |t: [u32; 3]| corners(t).map(|i| positions[i as usize]);
+        let mut rest = &mesh.triangles[..];
+        while let Some((&t, tail)) = rest.split_first() {
+            rest = tail;
+            if let Some(&u) = tail.first().filter(|_| pairs)
+                && let Some(q) = QuadLight::from_triangles(place(t), place(u), emission)
+            {
+                let id = self.add_light(mesh, name, Light::Quad(q))?;
+                self.push_quad(id, [t, u].map(|t| (place(t), corners(t))), attr, mesh.material, masked);
+                rest = &tail[1..];
+                continue;
             }
-            return Ok(());
-        }
-        for &t in &mesh.triangles {
-            let t = corners(t);
             let mut id = NO_LIGHT;
             if emissive {
-                let light = TriangleLight::new(t.map(|i| positions[i as usize]), emission).map(|l| {
+                let light = TriangleLight::new(place(t), emission).map(|l| {
                     match (&material.emission_texture, &mesh.uvs) {
-                        (Some(tex), Some(uvs)) => l.with_texture(*tex, t.map(|i| uvs[i as usize]), self.images),
+                        (Some(tex), Some(uvs)) => l.with_texture(*tex, corners(t).map(|i| uvs[i as usize]), self.images),
                         _ => l,
                     }
                 });
@@ -206,7 +198,7 @@ impl<'a> Placer<'a> {
                     None => self.degenerate_emitters += 1,
                 }
             }
-            self.geo.push_triangle(t.map(|i| positions[i as usize]), t, attr, mesh.material, id, masked);
+            self.geo.push_triangle(place(t), corners(t), attr, mesh.material, id, masked);
         }
         Ok(())
     }

@@ -98,9 +98,6 @@ fn validate_mesh(file: &str, index: usize, m: &MeshDesc, materials: usize) -> Re
             format!("material index {} out of range ({materials} materials)", m.material),
         ));
     }
-    if m.quads && !m.triangles.len().is_multiple_of(2) {
-        return Err(Error::scene(file, what, "a quad mesh needs an even number of triangles"));
-    }
     Ok(())
 }
 
