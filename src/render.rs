@@ -13,9 +13,9 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use crate::film::{AovSet, Film};
-use crate::integrator::{RayCounters, path};
+use crate::integrator::{RayCounters, Tally, path};
 use crate::interrupt::{self, Stop};
-use crate::light_sampler::LightStrategy;
+use crate::light_sampler::{LEARN_UNTIL, LearnedStats, LightStrategy, Observations};
 use crate::math::UVec2;
 use crate::sampling::{Dim, SampleStream};
 use crate::scene::Scene;
@@ -87,6 +87,8 @@ pub struct RenderStats {
     pub rays: RayCounters,
     /// Samples whose value was not finite and were counted as black (a bug if ever > 0).
     pub non_finite_samples: u64,
+    /// What a learning light sampler learned (its memory, the time learning took).
+    pub learned: Option<LearnedStats>,
     /// Whether the user stopped the render ([`Stop::AfterPass`]: the film holds the passes
     /// finished; [`Stop::Now`]: it is incomplete and must not be written).
     pub stopped: Stop,
@@ -100,6 +102,7 @@ impl Default for RenderStats {
             samples: 0,
             rays: RayCounters::default(),
             non_finite_samples: 0,
+            learned: None,
             stopped: Stop::No,
         }
     }
@@ -126,7 +129,17 @@ pub struct RenderOutput {
     pub stats: RenderStats,
 }
 
-/// Adds samples `first..first+count` of every pixel to `film`.
+/// What one pass reports besides the samples it adds to the film.
+struct PassTally {
+    rays: RayCounters,
+    non_finite: u64,
+    /// Per band, in image order, what its light samples saw (when the strategy learns).
+    seen: Vec<Observations>,
+}
+
+/// Adds samples `first..first+count` of every pixel to `film`; with `learning`, keeps what
+/// the light samples saw for the strategy to learn from.
+#[allow(clippy::too_many_arguments)]
 fn render_pass(
     scene: &Scene,
     strategy: &LightStrategy,
@@ -134,17 +147,18 @@ fn render_pass(
     film: &mut Film,
     first: u32,
     count: u32,
+    learning: bool,
     progress: Option<&dyn RenderObserver>,
-) -> (RayCounters, u64) {
+) -> PassTally {
     let size = settings.resolution;
     let bands: Vec<_> = film.bands_mut(ROWS_PER_BAND).collect();
-    let results: Vec<(RayCounters, u64)> = bands
+    let results: Vec<(Tally, u64)> = bands
         .into_par_iter()
         .map(|(row0, pixels, mut aovs)| {
-            let mut counters = RayCounters::default();
+            let mut tally = Tally { seen: learning.then(Observations::default), ..Tally::default() };
             let mut bad = 0u64;
             if interrupt::requested() == Stop::Now {
-                return (counters, bad);
+                return (tally, bad);
             }
             for (k, px) in pixels.iter_mut().enumerate() {
                 let index = row0 as usize * size.x as usize + k;
@@ -152,7 +166,7 @@ fn render_pass(
                 for s in first..first + count {
                     let stream = SampleStream::new(settings.seed, index as u64, s as u64);
                     let ray = scene.camera.ray(pixel, size, stream.get_2d(0, Dim::PixelJitter, 0));
-                    let smp = path::radiance(scene, strategy, ray, &stream, settings.max_depth, &mut counters);
+                    let smp = path::radiance(scene, strategy, ray, &stream, settings.max_depth, &mut tally);
                     if smp.radiance.is_finite() {
                         px.add(smp.radiance);
                     } else {
@@ -167,14 +181,17 @@ fn render_pass(
             if let Some(observer) = progress {
                 observer.advance(pixels.len() as u64 * count as u64);
             }
-            (counters, bad)
+            (tally, bad)
         })
         .collect();
     film.add_spp(count);
-    results.iter().fold((RayCounters::default(), 0), |(mut c, b), (rc, rb)| {
-        c.add(rc);
-        (c, b + rb)
-    })
+    let mut pass = PassTally { rays: RayCounters::default(), non_finite: 0, seen: Vec::new() };
+    for (tally, bad) in results {
+        pass.rays.add(&tally.rays);
+        pass.non_finite += bad;
+        pass.seen.extend(tally.seen);
+    }
+    pass
 }
 
 /// The size of the next pass, or `None` when the budget is spent. `done` samples per pixel
@@ -205,6 +222,10 @@ fn next_pass(budget: Budget, done: u32, per_spp: Option<Duration>, elapsed: Dura
 /// Renders `scene` with `strategy` in the current rayon pool, telling `observer` how far it
 /// is and showing it the film after every pass ([`next_pass`] sizes them). A stop the user
 /// asks for ([`crate::interrupt`]) ends the render after the pass under way, or at once.
+///
+/// A strategy that learns starts from nothing in every render and learns between passes,
+/// at every power of two of spp up to [`LEARN_UNTIL`]: passes end there whatever the budget,
+/// so what it learns depends on the samples, not on the timing.
 pub fn render(
     scene: &Scene,
     strategy: &LightStrategy,
@@ -221,14 +242,23 @@ pub fn render(
         Budget::Time(limit) => limit.as_millis() as u64,
     });
     let (mut per_spp, mut reported_ms) = (None, 0);
-    while let Some(count) = next_pass(settings.budget, film.spp(), per_spp, start.elapsed()) {
+    let mut learner = strategy.fresh_learner();
+    while let Some(mut count) = next_pass(settings.budget, film.spp(), per_spp, start.elapsed()) {
         let t0 = Instant::now();
         let fixed = matches!(settings.budget, Budget::Spp(_));
         let first = film.spp();
+        let learning = learner.is_some() && first < LEARN_UNTIL;
+        if learning {
+            count = count.min((first + 1).next_power_of_two() - first);
+        }
         let progress = Some(&*observer).filter(|_| fixed);
-        let (c, bad) = render_pass(scene, strategy, settings, &mut film, first, count, progress);
-        stats.rays.add(&c);
-        stats.non_finite_samples += bad;
+        let current = learner.as_ref().unwrap_or(strategy);
+        let pass = render_pass(scene, current, settings, &mut film, first, count, learning, progress);
+        stats.rays.add(&pass.rays);
+        stats.non_finite_samples += pass.non_finite;
+        if let Some(l) = learner.as_mut().filter(|_| learning) {
+            l.learn(pass.seen);
+        }
         per_spp = Some(t0.elapsed() / count);
         stats.stopped = interrupt::requested();
         if stats.stopped == Stop::Now {
@@ -245,6 +275,7 @@ pub fn render(
         }
     }
     stats.elapsed = start.elapsed();
+    stats.learned = learner.as_ref().and_then(|l| l.learner()).map(|l| l.stats());
     stats.spp = film.spp();
     stats.samples = pixels * film.spp() as u64;
     RenderOutput { film, stats }

@@ -26,16 +26,20 @@ pub enum LightSamplerKind {
     Local,
     /// One light, by descending a light BVH with the same importance (O(log n)).
     Tree,
+    /// The light BVH, its first levels reweighted per region of the scene by how much of
+    /// each cluster's light earlier passes saw arrive (occlusion learned).
+    Learned,
 }
 
 impl LightSamplerKind {
     /// Every sampler, in the order the command line lists them.
-    pub const EVERY: [LightSamplerKind; 5] = [
+    pub const EVERY: [LightSamplerKind; 6] = [
         LightSamplerKind::All,
         LightSamplerKind::Uniform,
         LightSamplerKind::Power,
         LightSamplerKind::Local,
         LightSamplerKind::Tree,
+        LightSamplerKind::Learned,
     ];
 
     /// The name used on the command line, in scene files and in file headers.
@@ -46,6 +50,7 @@ impl LightSamplerKind {
             LightSamplerKind::Power => "power",
             LightSamplerKind::Local => "local",
             LightSamplerKind::Tree => "tree",
+            LightSamplerKind::Learned => "learned",
         }
     }
 }
@@ -77,7 +82,7 @@ pub struct RenderDefaults {
     pub spp: Option<u32>,
     /// Maximum scattering events (1 = direct lighting only).
     pub max_depth: Option<u32>,
-    /// Light sampler: `all`, `uniform`, `power`, `local`, `tree`.
+    /// Light sampler: `all`, `uniform`, `power`, `local`, `tree`, `learned`.
     pub sampler: Option<LightSamplerKind>,
     /// Random seed.
     pub seed: Option<u64>,

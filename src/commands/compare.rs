@@ -316,6 +316,8 @@ fn run_sampler(
     let build_seconds = t.elapsed().as_secs_f64();
     let mut seeds = SeedStatistics::new(reference.pixels.len());
     let (mut runs, mut first) = (Vec::new(), None);
+    // A learning sampler holds more once it has learned: report the largest it held.
+    let mut memory_bytes = strategy.memory_bytes();
     for &seed in &plan.seeds {
         let mut watch = Convergence {
             progress: Progress::new(opts.progress, kind.name()),
@@ -328,6 +330,7 @@ fn run_sampler(
         }
         let m = error_metrics(&r.film.means(), &reference.pixels)?;
         let seconds = r.stats.elapsed.as_secs_f64();
+        memory_bytes = memory_bytes.max(r.stats.learned.map_or(0, |l| l.memory_bytes));
         seeds.add(&r.film);
         runs.push(RunResult {
             seed,
@@ -342,7 +345,7 @@ fn run_sampler(
     }
     let (mean, mean_variance) = seeds.finish();
     let first = first.expect("a plan has at least one seed");
-    Ok(SamplerRuns { kind, build_seconds, memory_bytes: strategy.memory_bytes(), runs, first, mean, mean_variance })
+    Ok(SamplerRuns { kind, build_seconds, memory_bytes, runs, first, mean, mean_variance })
 }
 
 /// The mean image over seeds and the variance of that mean.

@@ -220,6 +220,17 @@ impl fmt::Display for RenderReport {
             st.rays.rays,
             st.rays.shadow_rays
         )?;
+        if let Some(l) = &st.learned {
+            writeln!(
+                f,
+                "learned    {} cells from {} light samples (passes up to {} spp), {} in {}",
+                l.cells,
+                l.samples,
+                crate::light_sampler::LEARN_UNTIL.min(st.spp),
+                human_bytes(l.memory_bytes as u64),
+                human_duration(l.learning_time)
+            )?;
+        }
         if st.stopped == Stop::AfterPass {
             writeln!(f, "stopped    interrupted after {} spp; the files hold what was rendered", st.spp)?;
         }

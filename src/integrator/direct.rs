@@ -6,12 +6,12 @@
 //! direction. With `all`, every light gets its own point (`Dim::LightPoint`, sub-index = light)
 //! and selection pmf 1. Delta lights get weight 1: BSDF sampling cannot find them.
 
-use super::RayCounters;
+use super::{RayCounters, Tally};
 use crate::geometry::{Ray, offset_ray_origin};
 use crate::light::{Light, LightId};
 use crate::light_sampler::{LightSampler, LightStrategy, ShadingContext};
 use crate::material::ShadingPoint;
-use crate::math::{Rgb, Vec3A, power_heuristic};
+use crate::math::{Rgb, Vec3A, luminance, power_heuristic};
 use crate::sampling::{Dim, SampleStream};
 use crate::scene::Scene;
 
@@ -25,7 +25,9 @@ pub fn selection_pmf(strategy: &LightStrategy, ctx: &ShadingContext, light: Ligh
 }
 
 /// The contribution of one chosen light, divided by its selection probability `pmf`, through
-/// the volume of absorption `medium` the point lies in.
+/// the volume of absorption `medium` the point lies in. `observe(c, visible)` hears of each
+/// shadow ray: the luminance of the unshadowed, unweighted contribution and whether it got
+/// through.
 #[inline]
 #[allow(clippy::too_many_arguments)]
 fn light_contribution(
@@ -38,6 +40,7 @@ fn light_contribution(
     medium: Rgb,
     u: [u64; 2],
     counters: &mut RayCounters,
+    observe: impl FnOnce(f32, bool),
 ) -> Rgb {
     let Some(ls) = light.sample_li(p, u, &scene.images) else { return Rgb::ZERO };
     let f = sp.eval_cos(wo, ls.wi);
@@ -52,15 +55,17 @@ fn light_contribution(
         let target = if ls.n == Vec3A::ZERO { ls.p } else { offset_ray_origin(ls.p, ls.n) };
         scene.occluded(&Ray::new(origin, target - origin), 1.0)
     };
-    if occluded {
-        return Rgb::ZERO;
-    }
-    let weight = if light.is_delta() { 1.0 } else { power_heuristic(pmf * ls.pdf, sp.pdf(wo, ls.wi)) };
     // Only a light on this side of the surface is reached through the volume the point is in;
     // towards the far side the ray leaves it at once.
     let inside = medium != Rgb::ZERO && ls.wi.dot(sp.n_geom) > 0.0;
     let through = if inside { super::path::transmittance(medium, ls.distance) } else { Rgb::ONE };
-    f * ls.radiance * through * (weight / (pmf * ls.pdf))
+    let unshadowed = f * ls.radiance * through / (pmf * ls.pdf);
+    observe(luminance(unshadowed), !occluded);
+    if occluded {
+        return Rgb::ZERO;
+    }
+    let weight = if light.is_delta() { 1.0 } else { power_heuristic(pmf * ls.pdf, sp.pdf(wo, ls.wi)) };
+    unshadowed * weight
 }
 
 /// Direct light reflected towards `wo` at surface point `p` (inside a volume of absorption
@@ -76,7 +81,7 @@ pub fn estimate_direct(
     medium: Rgb,
     stream: &SampleStream,
     bounce: u32,
-    counters: &mut RayCounters,
+    tally: &mut Tally,
 ) -> Rgb {
     match strategy {
         LightStrategy::All => scene
@@ -85,7 +90,7 @@ pub fn estimate_direct(
             .enumerate()
             .map(|(i, light)| {
                 let u = stream.get_2d_u64(bounce, Dim::LightPoint, i as u32);
-                light_contribution(scene, light, 1.0, sp, p, wo, medium, u, counters)
+                light_contribution(scene, light, 1.0, sp, p, wo, medium, u, &mut tally.rays, |_, _| {})
             })
             .fold(Rgb::ZERO, |a, b| a + b),
         LightStrategy::One(sampler) => {
@@ -96,7 +101,13 @@ pub fn estimate_direct(
                 Some(s) => {
                     debug_assert!(s.pmf > 0.0);
                     let light = &scene.lights[s.light.0 as usize];
-                    light_contribution(scene, light, s.pmf, sp, p, wo, medium, u_point, counters)
+                    let Tally { rays, seen } = tally;
+                    let observe = |c, visible| {
+                        if let (Some(seen), Some(learner)) = (seen.as_mut(), strategy.learner()) {
+                            learner.observe(seen, &ctx, s.light, c, visible);
+                        }
+                    };
+                    light_contribution(scene, light, s.pmf, sp, p, wo, medium, u_point, rays, observe)
                 }
                 None => Rgb::ZERO,
             }

@@ -9,6 +9,15 @@ pub mod path;
 
 pub use path::FirstHit;
 
+/// What one worker's paths report besides their radiance.
+#[derive(Debug, Default)]
+pub struct Tally {
+    /// Rays traced.
+    pub rays: RayCounters,
+    /// What the light samples saw, kept when the light sampler learns from it.
+    pub seen: Option<crate::light_sampler::Observations>,
+}
+
 /// Rays traced by one worker, summed at the end of a render (no atomics on the hot path).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RayCounters {

@@ -6,7 +6,7 @@
 //! after three scattering events. Every random number is addressed by (bounce, `Dim`), so the
 //! choices of one decision never shift another's numbers.
 
-use super::RayCounters;
+use super::Tally;
 use super::direct::{estimate_direct, selection_pmf};
 use crate::geometry::{Ray, SurfaceHit};
 use crate::light::{Light, LightId};
@@ -130,7 +130,7 @@ pub fn radiance(
     mut ray: Ray,
     stream: &SampleStream,
     max_depth: u32,
-    counters: &mut RayCounters,
+    tally: &mut Tally,
 ) -> PathSample {
     let mut l = Rgb::ZERO;
     let mut first_hit = None;
@@ -142,7 +142,7 @@ pub fn radiance(
     let mut medium = Rgb::ZERO;
     let mut depth = 0u32;
     loop {
-        counters.rays += 1;
+        tally.rays.rays += 1;
         let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
             l += beta * escaped(scene, strategy, ray.dir.normalize(), prev);
             break;
@@ -166,7 +166,7 @@ pub fn radiance(
         let sp = ShadingPoint::new(bsdf, hit.n_geom, n_shading, wo);
 
         if !scene.lights.is_empty() {
-            l += beta * estimate_direct(scene, strategy, &sp, hit.p, wo, medium, stream, depth, counters);
+            l += beta * estimate_direct(scene, strategy, &sp, hit.p, wo, medium, stream, depth, tally);
         }
 
         let u_lobe = stream.get_1d(depth, Dim::BsdfLobe, 0);

@@ -178,14 +178,7 @@ pub fn load_meshes(path: &Path) -> Result<LoadedMeshes> {
                 (out.materials.len() - 1) as u32
             }),
         };
-        out.meshes.push(MeshDesc {
-            name: model.name.clone(),
-            positions,
-            normals,
-            uvs,
-            triangles,
-            material,
-        });
+        out.meshes.push(MeshDesc { name: model.name.clone(), positions, normals, uvs, triangles, material });
     }
     Ok(out)
 }

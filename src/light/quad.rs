@@ -82,10 +82,12 @@ mod tests {
 
     #[test]
     fn triangle_pairs_make_the_parallelogram_they_cover() {
-        let (a, b, c, d) = (Vec3A::new(1.0, 2.0, 3.0), Vec3A::new(3.0, 2.0, 3.5), Vec3A::new(3.5, 2.0, 5.0), Vec3A::ZERO);
+        let (a, b, c, d) =
+            (Vec3A::new(1.0, 2.0, 3.0), Vec3A::new(3.0, 2.0, 3.5), Vec3A::new(3.5, 2.0, 5.0), Vec3A::ZERO);
         let d = d + a + c - b;
         // Blender's split (a,b,c)+(a,c,d), the other diagonal, and rotated corner orders.
-        for (t0, t1) in [([a, b, c], [a, c, d]), ([a, b, d], [b, c, d]), ([c, a, b], [d, a, c]), ([b, d, a], [c, d, b])] {
+        for (t0, t1) in [([a, b, c], [a, c, d]), ([a, b, d], [b, c, d]), ([c, a, b], [d, a, c]), ([b, d, a], [c, d, b])]
+        {
             let q = QuadLight::from_triangles(t0, t1, E).unwrap_or_else(|| panic!("{t0:?} {t1:?}"));
             let corners = [q.p0, q.p0 + q.e1, q.p0 + q.e1 + q.e2, q.p0 + q.e2];
             assert!([a, b, c, d].iter().all(|v| corners.iter().any(|w| (*v - *w).length() < 1e-5)), "{corners:?}");

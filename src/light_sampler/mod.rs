@@ -7,11 +7,13 @@
 //! light, one shadow ray each; not a sampler) beside them. Depends on `light`, `math` and
 //! `settings`.
 
+mod learned;
 mod local;
 mod power;
 mod tree;
 mod uniform;
 
+pub use learned::{DEFENSIVE, LEARN_UNTIL, LEVELS, LearnedSampler, LearnedStats, Observations};
 pub use local::LocalSampler;
 pub use power::PowerSampler;
 pub use tree::{LightTree, TreeStats};
@@ -77,6 +79,8 @@ pub enum AnyLightSampler {
     Local(LocalSampler),
     /// See [`LightTree`].
     Tree(LightTree),
+    /// See [`LearnedSampler`].
+    Learned(LearnedSampler),
 }
 
 impl LightSampler for AnyLightSampler {
@@ -87,6 +91,7 @@ impl LightSampler for AnyLightSampler {
             AnyLightSampler::Power(s) => s.sample(ctx, u),
             AnyLightSampler::Local(s) => s.sample(ctx, u),
             AnyLightSampler::Tree(s) => s.sample(ctx, u),
+            AnyLightSampler::Learned(s) => s.sample(ctx, u),
         }
     }
 
@@ -97,6 +102,7 @@ impl LightSampler for AnyLightSampler {
             AnyLightSampler::Power(s) => s.cell(ctx, light),
             AnyLightSampler::Local(s) => s.cell(ctx, light),
             AnyLightSampler::Tree(s) => s.cell(ctx, light),
+            AnyLightSampler::Learned(s) => s.cell(ctx, light),
         }
     }
 }
@@ -126,6 +132,7 @@ impl AnyLightSampler {
     pub fn sample_prefetching(&self, ctx: &ShadingContext, u: u64, lights: &[Light]) -> Option<SampledLight> {
         match self {
             AnyLightSampler::Tree(s) => s.sample_hinting(ctx, u, |i| prefetch(lights, i as usize)),
+            AnyLightSampler::Learned(s) => s.sample_hinting(ctx, u, |i| prefetch(lights, i as usize)),
             _ => self.sample(ctx, u),
         }
     }
@@ -137,6 +144,7 @@ impl AnyLightSampler {
             AnyLightSampler::Power(s) => s.memory_bytes(),
             AnyLightSampler::Local(s) => s.memory_bytes(),
             AnyLightSampler::Tree(s) => s.stats().memory_bytes,
+            AnyLightSampler::Learned(s) => s.memory_bytes(),
         }
     }
 }
@@ -167,14 +175,40 @@ impl LightStrategy {
             }
             LightSamplerKind::Local => LightStrategy::One(AnyLightSampler::Local(LocalSampler::new(lights))),
             LightSamplerKind::Tree => LightStrategy::One(AnyLightSampler::Tree(LightTree::new(lights))),
+            LightSamplerKind::Learned => {
+                LightStrategy::One(AnyLightSampler::Learned(LearnedSampler::new(lights, scene_radius)))
+            }
         }
     }
 
-    /// The light tree's statistics, when this is the `tree` sampler.
+    /// The light tree's statistics, when this is the `tree` sampler or one built on it.
     pub fn tree_stats(&self) -> Option<TreeStats> {
         match self {
             LightStrategy::One(AnyLightSampler::Tree(t)) => Some(t.stats()),
+            LightStrategy::One(AnyLightSampler::Learned(l)) => Some(l.tree().stats()),
             _ => None,
+        }
+    }
+
+    /// The sampler that learns from the passes, if this is one.
+    pub fn learner(&self) -> Option<&LearnedSampler> {
+        match self {
+            LightStrategy::One(AnyLightSampler::Learned(l)) => Some(l),
+            _ => None,
+        }
+    }
+
+    /// A copy that has learned nothing yet, for a render to learn in, when this strategy
+    /// learns; `None` otherwise (the strategy is used as it is).
+    pub fn fresh_learner(&self) -> Option<LightStrategy> {
+        self.learner().map(|l| LightStrategy::One(AnyLightSampler::Learned(l.fresh())))
+    }
+
+    /// Learns from one pass's observations, band by band in image order (nothing to do for
+    /// a strategy that does not learn).
+    pub fn learn(&mut self, bands: Vec<Observations>) {
+        if let LightStrategy::One(AnyLightSampler::Learned(l)) = self {
+            l.learn(bands);
         }
     }
 

@@ -5,7 +5,7 @@
 
 use crate::common::{Stats, check_cells_at, draw, pick_chi_square, sidak, z_p_value};
 use myriad::light::{AreaEmission, DistantLight, Light, LightId, PointLight, QuadLight, SpotLight, TriangleLight};
-use myriad::light_sampler::{LightSampler, LightStrategy, ShadingContext};
+use myriad::light_sampler::{DEFENSIVE, LEVELS, LearnedSampler, LightSampler, LightStrategy, ShadingContext};
 use myriad::math::{Rgb, Vec3A};
 use myriad::sampling::{Dim, SampleStream};
 use myriad::settings::LightSamplerKind;
@@ -217,4 +217,62 @@ fn one_sample_estimator_matches_the_sum_over_point_lights() {
             check_estimator_against_sum(&s, &lights, ctx, alpha);
         }
     }
+}
+
+/// A `learned` sampler over `lights` after one pass of observations at `ctxs`, in which
+/// every light with `hidden(light)` was occluded and every other one got through.
+fn trained(lights: &[Light], ctxs: &[ShadingContext], hidden: &dyn Fn(&Light) -> bool) -> LearnedSampler {
+    let mut learned = LearnedSampler::new(lights, 10.0);
+    let mut seen = learned.observations();
+    for (i, ctx) in ctxs.iter().enumerate() {
+        for k in 0..4000u64 {
+            let u = SampleStream::new(99, i as u64, k).get_1d_u64(0, Dim::LightSelect, 0);
+            if let Some(s) = learned.sample(ctx, u) {
+                learned.observe(&mut seen, ctx, s.light, 1.0, !hidden(&lights[s.light.0 as usize]));
+            }
+        }
+    }
+    learned.learn(vec![seen]);
+    learned
+}
+
+#[test]
+fn learned_sampler_moves_samples_off_hidden_lights_and_keeps_its_defensive_floor() {
+    let lights = mixed_lights(200);
+    let ctxs = contexts(12);
+    // Lights on the x < 0 side are behind a wall from everywhere.
+    let hidden = |l: &Light| {
+        let b = l.bounds();
+        !b.infinite && b.centroid().x < 0.0
+    };
+    let learned = trained(&lights, &ctxs, &hidden);
+    assert!(learned.stats().cells > 0 && learned.stats().samples > 0, "{:?}", learned.stats());
+    let tree = LearnedSampler::new(&lights, 10.0);
+    let floor = DEFENSIVE.powi(LEVELS as i32);
+    let alpha = sidak(ctxs.len());
+    let (mut moved, mut eligible) = (0, 0);
+    for (i, ctx) in ctxs.iter().enumerate() {
+        // The contract every sampler keeps: cells tile, picks follow the pmf.
+        check_cells_at(&learned, ctx, lights.len());
+        let r = pick_chi_square(&learned, ctx, lights.len(), 50_000, i as u64);
+        assert!(r.p > alpha, "learned at {ctx:?}: {r:?}");
+        let (mut hidden_tree, mut hidden_learned) = (0.0f64, 0.0f64);
+        for (l, light) in lights.iter().enumerate() {
+            let (pt, pl) = (tree.pmf(ctx, LightId(l as u32)), learned.pmf(ctx, LightId(l as u32)));
+            // Never below β^levels of the tree's pmf, never 0 where the tree's is not.
+            assert!(pl >= floor * pt * (1.0 - 1e-4), "light {l} at {ctx:?}: {pl} < {floor} · {pt}");
+            if hidden(light) {
+                (hidden_tree, hidden_learned) = (hidden_tree + pt as f64, hidden_learned + pl as f64);
+            }
+        }
+        if hidden_tree > 0.2 {
+            eligible += 1;
+            moved += (hidden_learned < 0.8 * hidden_tree) as usize;
+        }
+    }
+    assert!(
+        eligible >= 4 && moved * 4 >= eligible * 3,
+        "the hidden lights kept their share at {} of {eligible} points",
+        eligible - moved
+    );
 }

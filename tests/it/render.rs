@@ -13,7 +13,7 @@ use myriad::scene::description::LightDesc;
 use myriad::scene::shapes::{box_mesh, quad_mesh};
 use myriad::settings::LightSamplerKind;
 
-pub const ALL_KINDS: [LightSamplerKind; 5] = LightSamplerKind::EVERY;
+pub const ALL_KINDS: [LightSamplerKind; 6] = LightSamplerKind::EVERY;
 
 pub fn render_with(scene: &TestScene, kind: LightSamplerKind, spp: u32, max_depth: u32, seed: u64) -> Film {
     let strategy = LightStrategy::build(kind, &scene.lights, scene.radius);
@@ -230,6 +230,13 @@ pub fn compare_films(a: &Film, b: &Film, alpha: f64, label: &str) {
 
 #[test]
 fn same_seed_gives_identical_pixels_for_any_thread_count() {
+    // `learned` too: what it learns between passes must not depend on the threads either.
+    for kind in [LightSamplerKind::Power, LightSamplerKind::Learned] {
+        identical_for_any_thread_count(kind);
+    }
+}
+
+fn identical_for_any_thread_count(kind: LightSamplerKind) {
     let opts = BuildOptions { resolution: Some(UVec2::new(24, 18)), camera: None };
     let films: Vec<Film> = [1usize, 2, 3]
         .iter()
@@ -237,7 +244,7 @@ fn same_seed_gives_identical_pixels_for_any_thread_count() {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             pool.install(|| {
                 let scene = TestScene::from(load_scene(None, &opts.clone().into()).unwrap());
-                render_with(&scene, LightSamplerKind::Power, 8, 8, 42)
+                render_with(&scene, kind, 8, 8, 42)
             })
         })
         .collect();
@@ -254,7 +261,7 @@ fn same_seed_gives_identical_pixels_for_any_thread_count() {
     }
     // A different seed gives a different image.
     let scene = TestScene::from(load_scene(None, &opts.clone().into()).unwrap());
-    let other = render_with(&scene, LightSamplerKind::Power, 8, 8, 43);
+    let other = render_with(&scene, kind, 8, 8, 43);
     assert!((0..24 * 18).any(|i| other.mean(i) != films[0].mean(i)));
 }
 

@@ -23,6 +23,9 @@
 mod build;
 mod collapse;
 mod compact;
+mod frontier;
+
+pub use frontier::Frontier;
 
 use std::time::{Duration, Instant};
 
@@ -37,7 +40,7 @@ use crate::math::Vec3A;
 use crate::math::distribution::{RANGE, Split, even_cell, even_pick, probability};
 
 /// Children per node.
-const WIDTH: usize = 4;
+pub const WIDTH: usize = 4;
 /// Marks a child slot that holds a light, not a node.
 const LEAF: u32 = 1 << 31;
 /// An unused child slot.
@@ -76,12 +79,39 @@ pub struct LightTree {
     stats: TreeStats,
 }
 
-/// Importances of a node's children at `ctx` (0 for empty slots), and how `range` values
-/// split among them (`None` when every importance is 0).
+/// Changes the importances of node `node`'s children before they are split (a learned
+/// sampler's reweighting near the root). The same reweighting must be given to `sample`
+/// and `cell` for a pmf to match its sample.
+pub trait Reweight {
+    /// Changes the weights `w` of node `node`'s children; returns whether it changed any.
+    fn reweight(&self, node: usize, w: &mut [f32; WIDTH]) -> bool;
+}
+
+/// The tree's own weights.
+struct AsBuilt;
+
+impl Reweight for AsBuilt {
+    #[inline(always)]
+    fn reweight(&self, _: usize, _: &mut [f32; WIDTH]) -> bool {
+        false
+    }
+}
+
+/// Weights of a node's children at `ctx` (0 for empty slots), reweighted, whether
+/// `reweight` changed them, and how `range` values split among them (`None` when every
+/// weight is 0).
 #[inline(always)]
-fn children_split(node: &Node, grid: &Quantizer, ctx: &ShadingContext, range: u128) -> Option<([f32; WIDTH], Split)> {
-    let imp = node.decode(grid).importance(ctx.p, ctx.n).to_array();
-    Split::new(range, imp).map(|s| (imp, s))
+fn children_split(
+    nodes: &[Node],
+    node: usize,
+    grid: &Quantizer,
+    ctx: &ShadingContext,
+    range: u128,
+    reweight: &impl Reweight,
+) -> Option<([f32; WIDTH], bool, Split)> {
+    let mut imp = nodes[node].decode(grid).importance(ctx.p, ctx.n).to_array();
+    let changed = reweight.reweight(node, &mut imp);
+    Split::new(range, imp).map(|s| (imp, changed, s))
 }
 
 /// A node whose lights' intensities φ differ by at most this factor may choose among them
@@ -213,6 +243,19 @@ impl LightTree {
     /// light it will shade (at 10⁶ lights, otherwise a certain cache miss per sample).
     #[inline]
     pub fn sample_hinting(&self, ctx: &ShadingContext, u: u64, leaf_hint: impl Fn(u32)) -> Option<SampledLight> {
+        self.sample_reweighted(ctx, u, leaf_hint, &AsBuilt)
+    }
+
+    /// [`sample_hinting`](Self::sample_hinting) with the children's weights changed by
+    /// `reweight` (a node whose weights it changes never ends the descent uniformly).
+    #[inline]
+    pub fn sample_reweighted(
+        &self,
+        ctx: &ShadingContext,
+        u: u64,
+        leaf_hint: impl Fn(u32),
+        reweight: &impl Reweight,
+    ) -> Option<SampledLight> {
         // `u` as an offset into the run of `range` values that reached `node`.
         let (mut u, mut range, mut node) = (u as u128, RANGE, 0usize);
         for _ in 0..MAX_DEPTH {
@@ -226,8 +269,8 @@ impl LightTree {
                     leaf_hint(c & !LEAF);
                 }
             }
-            let (imp, mut split) = children_split(n, &self.grid, ctx, range)?;
-            if let Some(m) = self.flat(node, &imp) {
+            let (imp, changed, mut split) = children_split(&self.nodes, node, &self.grid, ctx, range, reweight)?;
+            if let Some(m) = self.flat(node, &imp).filter(|_| !changed) {
                 let k = even_pick(u, m, range);
                 let (a, b) = even_cell(k, m, range);
                 let width = b - a;
@@ -256,6 +299,15 @@ impl LightSampler for LightTree {
 
     #[inline]
     fn cell(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
+        self.cell_reweighted(ctx, light, &AsBuilt)
+    }
+}
+
+impl LightTree {
+    /// [`LightSampler::cell`] under the weights `reweight` gives, as
+    /// [`sample_reweighted`](Self::sample_reweighted) draws with them.
+    #[inline]
+    pub fn cell_reweighted(&self, ctx: &ShadingContext, light: LightId, reweight: &impl Reweight) -> (u128, u128) {
         let (mut trail, mut start, mut range, mut node) = (self.trails[light.0 as usize], 0u128, RANGE, 0usize);
         for _ in 0..MAX_DEPTH {
             let n = &self.nodes[node];
@@ -265,8 +317,11 @@ impl LightSampler for LightTree {
             if n.children[k] & LEAF == 0 {
                 prefetch(&self.nodes, n.children[k] as usize);
             }
-            let Some((imp, mut split)) = children_split(n, &self.grid, ctx, range) else { return (start, start) };
-            if let Some(m) = self.flat(node, &imp) {
+            let Some((imp, changed, mut split)) = children_split(&self.nodes, node, &self.grid, ctx, range, reweight)
+            else {
+                return (start, start);
+            };
+            if let Some(m) = self.flat(node, &imp).filter(|_| !changed) {
                 let k = self.rank[light.0 as usize] - self.spans[node].0;
                 let (a, b) = even_cell(k, m, range);
                 return (start + a, start + b);

@@ -184,12 +184,13 @@ impl<'a> Placer<'a> {
             }
             let mut id = NO_LIGHT;
             if emissive {
-                let light = TriangleLight::new(place(t), emission).map(|l| {
-                    match (&material.emission_texture, &mesh.uvs) {
-                        (Some(tex), Some(uvs)) => l.with_texture(*tex, corners(t).map(|i| uvs[i as usize]), self.images),
+                let light =
+                    TriangleLight::new(place(t), emission).map(|l| match (&material.emission_texture, &mesh.uvs) {
+                        (Some(tex), Some(uvs)) => {
+                            l.with_texture(*tex, corners(t).map(|i| uvs[i as usize]), self.images)
+                        }
                         _ => l,
-                    }
-                });
+                    });
                 match light {
                     Some(l) => {
                         id = self.add_light(mesh, name, Light::Triangle(l))?;

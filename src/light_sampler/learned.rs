@@ -1,0 +1,322 @@
+//! `learned`: the light tree, reweighted near the root by what earlier passes saw arrive.
+//!
+//! The tree weighs a cluster by power, distance and orientation and cannot see what stands
+//! between it and the point (Vévoda et al. 2018 learn that online; this is a cheap CPU form
+//! of it). Space is cut into cells (a grid of [`CELLS_PER_DIAMETER`] over the scene's
+//! diameter, times six normal directions); for each cell and each cluster of the tree's
+//! first [`LEVELS`] levels ([`Frontier`]), every light sample's unshadowed contribution `c`
+//! (luminance of f·Le·G / (pmf·pdf)) and whether its shadow ray got through are summed.
+//! A top node's child k then gets the factor
+//!
+//! `v_k = (n·r + κ) / (n + κ)`, `r = Σ c·visible / Σ c` over the child's clusters,
+//!
+//! (`n` samples, prior [`PRIOR`] samples of full visibility, so an unseen child keeps the
+//! tree's weight), and at that node the child is chosen with the **defensive mixture**
+//! `β·w_k/Σw + (1−β)·w_k·v_k/Σ(w·v)` of the tree's weights `w` ([`DEFENSIVE`] = β): at
+//! each of the [`LEVELS`] levels a child keeps at least β of its tree probability, so no
+//! light's pmf falls below β^LEVELS of the tree's, and none is ever 0 where the tree's is
+//! not. Below the top levels the tree chooses as it always does. Sampling and the pmf go
+//! through the same [`LightTree::sample_reweighted`] / [`LightTree::cell_reweighted`] with
+//! the same factors, so MIS at a BSDF hit sees exactly the pmf the light was sampled with.
+//!
+//! **Deterministic and mergeable.** The factors change only between passes, at sample
+//! counts 1, 2, 4, … up to [`LEARN_UNTIL`] per pixel, from every sample before that count;
+//! observations are summed per band of rows and the bands are merged in image order, so the
+//! image does not depend on the thread count. Samples from [`LEARN_UNTIL`] on all use the
+//! factors learned from samples `0..LEARN_UNTIL`: a render of samples `a..b` needs exactly
+//! that state when `a ≥ LEARN_UNTIL` (samples `0..LEARN_UNTIL` rendered first, their
+//! image discarded), and for `a` below it the states at each power of two up to `b`.
+
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use super::tree::{Frontier, LightTree, Reweight, WIDTH};
+use super::{LightSampler, SampledLight, ShadingContext};
+use crate::light::{Light, LightId};
+use crate::sampling::fmix64;
+
+/// Levels of the tree whose choices are learned (up to 4³ = 64 clusters).
+pub const LEVELS: u32 = 3;
+/// Grid cells along the scene's diameter.
+pub const CELLS_PER_DIAMETER: f32 = 16.0;
+/// The tree's share β in each learned choice.
+pub const DEFENSIVE: f32 = 0.3;
+/// Pseudo-samples of full visibility every child starts with.
+pub const PRIOR: f32 = 4.0;
+/// Samples per pixel after which the factors stay as they are.
+pub const LEARN_UNTIL: u32 = 32;
+/// Most cells learned; samples in further cells use the tree's own weights.
+pub const MAX_CELLS: usize = 1 << 16;
+
+/// A hasher for keys that are already well mixed by [`fmix64`].
+#[derive(Default)]
+struct KeyHasher(u64);
+
+impl Hasher for KeyHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = fmix64(self.0 ^ b as u64);
+        }
+    }
+    fn write_u64(&mut self, k: u64) {
+        self.0 = fmix64(self.0 ^ k);
+    }
+}
+
+type KeyMap<V> = HashMap<u64, V, BuildHasherDefault<KeyHasher>>;
+
+/// Sums for one cluster seen from one cell.
+#[derive(Clone, Copy, Debug, Default)]
+struct Sums {
+    /// Σ c · visible.
+    arrived: f64,
+    /// Σ c.
+    offered: f64,
+    /// Samples.
+    n: u32,
+}
+
+impl Sums {
+    fn add(&mut self, other: &Sums) {
+        self.arrived += other.arrived;
+        self.offered += other.offered;
+        self.n += other.n;
+    }
+}
+
+/// What one band of rows saw during a pass: per cell, sums per cluster.
+#[derive(Debug, Default)]
+pub struct Observations {
+    sums: KeyMap<Vec<Sums>>,
+}
+
+/// What the learning cost and holds, for the render summary, `info` and `compare`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LearnedStats {
+    /// Cells with learned factors.
+    pub cells: usize,
+    /// Light samples learned from.
+    pub samples: u64,
+    /// Bytes of sums and factors.
+    pub memory_bytes: usize,
+    /// Time spent merging observations and computing factors (between passes).
+    pub learning_time: Duration,
+}
+
+/// The learned factors of every cell, frozen for a pass.
+#[derive(Debug, Default)]
+struct Factors {
+    /// Cell key → row.
+    rows: KeyMap<u32>,
+    /// Per row: `v_k` for every top node and child, `slot·WIDTH + k`.
+    v: Vec<f32>,
+}
+
+/// The `learned` sampler: see the module docs.
+#[derive(Clone, Debug)]
+pub struct LearnedSampler {
+    tree: Arc<LightTree>,
+    frontier: Arc<Frontier>,
+    /// 1 / cell edge.
+    inv_cell: f32,
+    factors: Arc<Factors>,
+    /// Sums over every pass learned from, per cell: one entry per cluster.
+    sums: KeyMap<Vec<Sums>>,
+    stats: LearnedStats,
+}
+
+impl LearnedSampler {
+    /// The sampler over `lights` (non-empty) in a scene of radius `scene_radius`, with
+    /// nothing learned yet (it samples as the tree does).
+    pub fn new(lights: &[Light], scene_radius: f32) -> Self {
+        let tree = LightTree::new(lights);
+        let frontier = Frontier::new(&tree, LEVELS);
+        let inv_cell = CELLS_PER_DIAMETER / (2.0 * scene_radius.max(1e-6));
+        Self {
+            tree: Arc::new(tree),
+            frontier: Arc::new(frontier),
+            inv_cell,
+            factors: Arc::default(),
+            sums: KeyMap::default(),
+            stats: LearnedStats::default(),
+        }
+    }
+
+    /// The same sampler with nothing learned: what each render starts from.
+    pub fn fresh(&self) -> Self {
+        Self { factors: Arc::default(), sums: KeyMap::default(), stats: LearnedStats::default(), ..self.clone() }
+    }
+
+    /// The light tree it reweights.
+    pub fn tree(&self) -> &LightTree {
+        &self.tree
+    }
+
+    /// What it has learned so far.
+    pub fn stats(&self) -> LearnedStats {
+        LearnedStats { memory_bytes: self.memory_bytes(), ..self.stats }
+    }
+
+    /// Bytes of tree, frontier, sums and factors.
+    pub fn memory_bytes(&self) -> usize {
+        let clusters = self.frontier.clusters as usize;
+        self.tree.stats().memory_bytes
+            + self.frontier.memory_bytes()
+            + self.sums.len() * (clusters * std::mem::size_of::<Sums>() + 32)
+            + self.factors.v.len() * 4
+            + self.factors.rows.len() * 16
+    }
+
+    /// The cell of a shading context: its grid position and the dominant axis and sign of
+    /// its normal (a seventh bin for points off surfaces).
+    #[inline]
+    fn key(&self, ctx: &ShadingContext) -> u64 {
+        const HALF: f32 = (1 << 19) as f32;
+        let q = (ctx.p * self.inv_cell).floor();
+        let coord = |x: f32| (x.clamp(-HALF, HALF - 1.0) + HALF) as u64;
+        let a = ctx.n.abs();
+        let axis: usize = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let bin = if ctx.n == crate::math::Vec3A::ZERO { 6 } else { 2 * axis as u64 + (ctx.n[axis] < 0.0) as u64 };
+        coord(q.x) | coord(q.y) << 20 | coord(q.z) << 40 | bin << 60
+    }
+
+    /// The learned factors at `ctx`, if its cell has any.
+    #[inline]
+    fn factors_at(&self, ctx: &ShadingContext) -> Option<&[f32]> {
+        let row = *self.factors.rows.get(&self.key(ctx))? as usize;
+        let width = self.frontier.runs.len() * WIDTH;
+        Some(&self.factors.v[row * width..(row + 1) * width])
+    }
+
+    /// The reweighting of the tree at `ctx`: the defensive mixture with its cell's factors.
+    #[inline]
+    fn mixture(&self, ctx: &ShadingContext) -> Mixture<'_> {
+        Mixture { slot: &self.frontier.slot, v: self.factors_at(ctx) }
+    }
+
+    /// Prepares a band's observations (empty).
+    pub fn observations(&self) -> Observations {
+        Observations::default()
+    }
+
+    /// Records one light sample at `ctx`: its unshadowed contribution `c` and whether its
+    /// shadow ray got through.
+    #[inline]
+    pub fn observe(&self, seen: &mut Observations, ctx: &ShadingContext, light: LightId, c: f32, visible: bool) {
+        if !(c.is_finite() && c > 0.0) {
+            return;
+        }
+        let cluster = self.frontier.cluster[light.0 as usize] as usize;
+        let row =
+            seen.sums.entry(self.key(ctx)).or_insert_with(|| vec![Sums::default(); self.frontier.clusters as usize]);
+        let s = &mut row[cluster];
+        s.offered += c as f64;
+        s.arrived += if visible { c as f64 } else { 0.0 };
+        s.n += 1;
+    }
+
+    /// Learns from the bands' observations of one pass (in image order) and recomputes the
+    /// factors every cell will sample with from now on.
+    pub fn learn(&mut self, bands: Vec<Observations>) {
+        let start = Instant::now();
+        for band in bands {
+            for (cell, sums) in band.sums {
+                if !self.sums.contains_key(&cell) && self.sums.len() >= MAX_CELLS {
+                    continue;
+                }
+                let row = self.sums.entry(cell).or_insert_with(|| vec![Sums::default(); sums.len()]);
+                for (total, s) in row.iter_mut().zip(&sums) {
+                    total.add(s);
+                    self.stats.samples += s.n as u64;
+                }
+            }
+        }
+        self.factors = Arc::new(self.compute_factors());
+        self.stats.cells = self.factors.rows.len();
+        self.stats.learning_time += start.elapsed();
+    }
+
+    /// `v_k` of every cell's top nodes from the sums (see the module docs).
+    fn compute_factors(&self) -> Factors {
+        let width = self.frontier.runs.len() * WIDTH;
+        let mut cells: Vec<(&u64, &Vec<Sums>)> = self.sums.iter().collect();
+        cells.sort_unstable_by_key(|(k, _)| **k);
+        let mut f = Factors { rows: KeyMap::default(), v: Vec::with_capacity(cells.len() * width) };
+        for (row, (&cell, sums)) in cells.into_iter().enumerate() {
+            f.rows.insert(cell, row as u32);
+            for runs in self.frontier.runs.iter() {
+                for &(a, b) in runs {
+                    let mut s = Sums::default();
+                    for c in &sums[a as usize..b as usize] {
+                        s.add(c);
+                    }
+                    let r = if s.offered > 0.0 { (s.arrived / s.offered) as f32 } else { 1.0 };
+                    let n = s.n as f32;
+                    f.v.push((n * r + PRIOR) / (n + PRIOR));
+                }
+            }
+        }
+        f
+    }
+}
+
+/// The defensive mixture at the top nodes, with one cell's factors `v` (see the module docs).
+struct Mixture<'a> {
+    slot: &'a [u32],
+    v: Option<&'a [f32]>,
+}
+
+impl Reweight for Mixture<'_> {
+    #[inline(always)]
+    fn reweight(&self, node: usize, w: &mut [f32; WIDTH]) -> bool {
+        let (Some(v), Some(&slot)) = (self.v, self.slot.get(node)) else { return false };
+        if slot == u32::MAX {
+            return false;
+        }
+        let v = &v[slot as usize * WIDTH..][..WIDTH];
+        if v.iter().all(|&x| x == v[0]) {
+            return false;
+        }
+        let total: f32 = w.iter().map(|&x| x.max(0.0)).sum();
+        let seen: f32 = w.iter().zip(v).map(|(&x, &f)| x.max(0.0) * f).sum();
+        if !(total.is_finite() && total > 0.0 && seen > 0.0) {
+            return false;
+        }
+        let (a, b) = (DEFENSIVE / total, (1.0 - DEFENSIVE) / seen);
+        for (x, &f) in w.iter_mut().zip(v) {
+            *x = x.max(0.0) * (a + b * f);
+        }
+        true
+    }
+}
+
+impl LightSampler for LearnedSampler {
+    #[inline]
+    fn sample(&self, ctx: &ShadingContext, u: u64) -> Option<SampledLight> {
+        self.sample_hinting(ctx, u, |_| {})
+    }
+
+    #[inline]
+    fn cell(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
+        self.tree.cell_reweighted(ctx, light, &self.mixture(ctx))
+    }
+}
+
+impl LearnedSampler {
+    /// [`LightSampler::sample`] with the tree's leaf hints (see [`LightTree::sample_hinting`]).
+    #[inline]
+    pub fn sample_hinting(&self, ctx: &ShadingContext, u: u64, leaf_hint: impl Fn(u32)) -> Option<SampledLight> {
+        self.tree.sample_reweighted(ctx, u, leaf_hint, &self.mixture(ctx))
+    }
+}
