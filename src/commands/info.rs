@@ -6,7 +6,7 @@ use std::path::Path;
 
 use super::{LoadedScene, SceneOptions, human_duration, load_scene};
 use crate::error::Result;
-use crate::light_sampler::{LightTree, TreeStats};
+use crate::light_sampler::{LEARN_UNTIL, LearnedLayout, LearnedSampler, TreeStats};
 use crate::limits::human_bytes;
 use crate::material::AlphaMode;
 
@@ -16,13 +16,17 @@ pub struct InfoReport {
     pub loaded: LoadedScene,
     /// The light tree built over its lights (none without lights).
     pub tree: Option<TreeStats>,
+    /// How the `learned` sampler would learn over that tree.
+    pub learned: Option<LearnedLayout>,
 }
 
 /// Loads and builds the scene and its light tree, and gathers their statistics.
 pub fn info(path: Option<&Path>, options: &SceneOptions) -> Result<InfoReport> {
     let loaded = load_scene(path, options)?;
-    let tree = (!loaded.scene.lights.is_empty()).then(|| LightTree::new(&loaded.scene.lights).stats());
-    Ok(InfoReport { loaded, tree })
+    let learned =
+        (!loaded.scene.lights.is_empty()).then(|| LearnedSampler::new(&loaded.scene.lights, loaded.scene.radius));
+    let (tree, learned) = (learned.as_ref().map(|l| l.tree().stats()), learned.map(|l| l.layout()));
+    Ok(InfoReport { loaded, tree, learned })
 }
 
 impl fmt::Display for InfoReport {
@@ -86,6 +90,17 @@ impl fmt::Display for InfoReport {
                 t.depth,
                 human_bytes(t.memory_bytes as u64),
                 t.memory_bytes as f64 / s.lights.len() as f64
+            )?;
+        }
+        if let Some(l) = &self.learned {
+            writeln!(
+                f,
+                "learned      {} clusters under {} top nodes, cells of {:.3} m × 6 normal directions, learns until {} spp, at most {}",
+                l.clusters,
+                l.top_nodes,
+                l.cell_size,
+                LEARN_UNTIL,
+                human_bytes(l.max_bytes as u64)
             )?;
         }
         for w in &r.warnings {

@@ -46,7 +46,10 @@ pub const DEFENSIVE: f32 = 0.3;
 /// Pseudo-samples of full visibility every child starts with.
 pub const PRIOR: f32 = 4.0;
 /// Samples per pixel after which the factors stay as they are.
-pub const LEARN_UNTIL: u32 = 32;
+pub const LEARN_UNTIL: u32 = 16;
+/// Children whose factors differ by less than this ratio keep the tree's weights: nothing
+/// worth the lost shortcut (the tree's uniform ends) was learned there.
+pub const FLAT_FACTORS: f32 = 1.5;
 /// Most cells learned; samples in further cells use the tree's own weights.
 pub const MAX_CELLS: usize = 1 << 16;
 
@@ -89,10 +92,38 @@ impl Sums {
     }
 }
 
-/// What one band of rows saw during a pass: per cell, sums per cluster.
-#[derive(Debug, Default)]
+/// What one band of rows saw during a pass: per cell (in the order first seen), sums per
+/// cluster.
+#[derive(Debug)]
 pub struct Observations {
-    sums: KeyMap<Vec<Sums>>,
+    cells: Vec<(u64, Vec<Sums>)>,
+    index: KeyMap<u32>,
+    /// The cell of the last observation and its place in `cells`: consecutive samples of a
+    /// pixel mostly land in one cell, and then need no hashing.
+    last: (u64, u32),
+}
+
+impl Default for Observations {
+    fn default() -> Self {
+        // No cell key is u64::MAX (the normal bin stays below 7 << 60).
+        Self { cells: Vec::new(), index: KeyMap::default(), last: (u64::MAX, 0) }
+    }
+}
+
+impl Observations {
+    /// The sums of cell `key`, created with `clusters` entries when new.
+    #[inline]
+    fn row(&mut self, key: u64, clusters: usize) -> &mut [Sums] {
+        if self.last.0 != key {
+            let cells = &mut self.cells;
+            let at = *self.index.entry(key).or_insert_with(|| {
+                cells.push((key, vec![Sums::default(); clusters]));
+                (cells.len() - 1) as u32
+            });
+            self.last = (key, at);
+        }
+        &mut self.cells[self.last.1 as usize].1
+    }
 }
 
 /// What the learning cost and holds, for the render summary, `info` and `compare`.
@@ -106,6 +137,19 @@ pub struct LearnedStats {
     pub memory_bytes: usize,
     /// Time spent merging observations and computing factors (between passes).
     pub learning_time: Duration,
+}
+
+/// How a `learned` sampler is laid out before it learns, for `info`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LearnedLayout {
+    /// Clusters of the tree's first [`LEVELS`] levels.
+    pub clusters: u32,
+    /// Top nodes whose choices are learned.
+    pub top_nodes: usize,
+    /// Edge of a grid cell, m.
+    pub cell_size: f32,
+    /// Most bytes the sums and factors can take ([`MAX_CELLS`] cells).
+    pub max_bytes: usize,
 }
 
 /// The learned factors of every cell, frozen for a pass.
@@ -150,6 +194,18 @@ impl LearnedSampler {
     /// The same sampler with nothing learned: what each render starts from.
     pub fn fresh(&self) -> Self {
         Self { factors: Arc::default(), sums: KeyMap::default(), stats: LearnedStats::default(), ..self.clone() }
+    }
+
+    /// Its clusters, cells and memory bound.
+    pub fn layout(&self) -> LearnedLayout {
+        let per_cell =
+            self.frontier.clusters as usize * std::mem::size_of::<Sums>() + self.frontier.runs.len() * WIDTH * 4;
+        LearnedLayout {
+            clusters: self.frontier.clusters,
+            top_nodes: self.frontier.runs.len(),
+            cell_size: 1.0 / self.inv_cell,
+            max_bytes: MAX_CELLS * (per_cell + 48),
+        }
     }
 
     /// The light tree it reweights.
@@ -218,9 +274,7 @@ impl LearnedSampler {
             return;
         }
         let cluster = self.frontier.cluster[light.0 as usize] as usize;
-        let row =
-            seen.sums.entry(self.key(ctx)).or_insert_with(|| vec![Sums::default(); self.frontier.clusters as usize]);
-        let s = &mut row[cluster];
+        let s = &mut seen.row(self.key(ctx), self.frontier.clusters as usize)[cluster];
         s.offered += c as f64;
         s.arrived += if visible { c as f64 } else { 0.0 };
         s.n += 1;
@@ -231,7 +285,7 @@ impl LearnedSampler {
     pub fn learn(&mut self, bands: Vec<Observations>) {
         let start = Instant::now();
         for band in bands {
-            for (cell, sums) in band.sums {
+            for (cell, sums) in band.cells {
                 if !self.sums.contains_key(&cell) && self.sums.len() >= MAX_CELLS {
                     continue;
                 }
@@ -253,18 +307,26 @@ impl LearnedSampler {
         let mut cells: Vec<(&u64, &Vec<Sums>)> = self.sums.iter().collect();
         cells.sort_unstable_by_key(|(k, _)| **k);
         let mut f = Factors { rows: KeyMap::default(), v: Vec::with_capacity(cells.len() * width) };
-        for (row, (&cell, sums)) in cells.into_iter().enumerate() {
-            f.rows.insert(cell, row as u32);
+        let mut row = Vec::with_capacity(width);
+        for (&cell, sums) in cells {
+            row.clear();
             for runs in self.frontier.runs.iter() {
-                for &(a, b) in runs {
+                let v = runs.map(|(a, b)| {
                     let mut s = Sums::default();
                     for c in &sums[a as usize..b as usize] {
                         s.add(c);
                     }
                     let r = if s.offered > 0.0 { (s.arrived / s.offered) as f32 } else { 1.0 };
                     let n = s.n as f32;
-                    f.v.push((n * r + PRIOR) / (n + PRIOR));
-                }
+                    (n * r + PRIOR) / (n + PRIOR)
+                });
+                let (lo, hi) = v.iter().fold((f32::INFINITY, 0.0f32), |(lo, hi), &x| (lo.min(x), hi.max(x)));
+                row.extend(if hi < FLAT_FACTORS * lo { [1.0; WIDTH] } else { v });
+            }
+            // A cell that learned nothing worth using samples as the tree does.
+            if row.iter().any(|&x| x != 1.0) {
+                f.rows.insert(cell, (f.v.len() / width) as u32);
+                f.v.extend_from_slice(&row);
             }
         }
         f

@@ -13,7 +13,7 @@ mod power;
 mod tree;
 mod uniform;
 
-pub use learned::{DEFENSIVE, LEARN_UNTIL, LEVELS, LearnedSampler, LearnedStats, Observations};
+pub use learned::{DEFENSIVE, LEARN_UNTIL, LEVELS, LearnedLayout, LearnedSampler, LearnedStats, Observations};
 pub use local::LocalSampler;
 pub use power::PowerSampler;
 pub use tree::{LightTree, TreeStats};

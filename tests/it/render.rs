@@ -307,3 +307,16 @@ fn the_image_size_is_a_render_setting_not_part_of_the_scene() {
     assert_eq!(a.size(), resolution);
     assert_eq!(a.means(), b.means());
 }
+
+/// `learned` stays unbiased where it learns most: behind the walls of the office floor it
+/// moves samples off hidden lamps, and its image agrees with the tree's (independent seeds).
+#[test]
+fn learned_agrees_with_the_tree_where_lights_are_hidden() {
+    let opts = BuildOptions { resolution: Some(UVec2::new(32, 24)), camera: None };
+    let scene = TestScene::from(load_scene(Some(&scene_path("offices.ron")), &opts.clone().into()).unwrap());
+    let reference = render_with(&scene, LightSamplerKind::Tree, 64, 3, 21);
+    for seed in [22, 23] {
+        let film = render_with(&scene, LightSamplerKind::Learned, 64, 3, seed);
+        compare_films(&film, &reference, sidak(2), "learned");
+    }
+}
