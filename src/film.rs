@@ -1,10 +1,16 @@
 //! The film: per-pixel sums of samples, turned into mean, variance and AOV images.
 //!
-//! Owns: accumulation (f64 sums of value and value², so that partial renders merge exactly and
-//! variance needs no second pass), the optional first-hit AOVs, and the [`Layers`] written for
-//! output. A pixel is only ever written by the worker that owns its row band, so there are no
-//! locks; samples are added in sample-index order, so the sums (and the image) do not depend
-//! on the thread count.
+//! Owns: accumulation, the optional first-hit AOVs, and the [`Layers`] written for output. A
+//! pixel is only ever written by the worker that owns its row band, so there are no locks.
+//!
+//! **Sums are exact.** Every sample is turned into a fixed-point integer ([`Fixed`]: value ×
+//! 2⁶², value² × 2³², AOVs × 2³², as i128) and summed as integers, so the sums do not depend
+//! on the order samples are added in: a render split into sample ranges and merged
+//! ([`Film::merge`]) holds exactly the sums, and gives exactly the image, one render of the
+//! union makes, whatever the split, the thread count or the order of the parts. Samples are
+//! clamped to ±2³¹ (2.1·10⁹, beyond any radiance a scene should make) so that 2³² of them
+//! cannot overflow; value² keeps 2⁻³² absolute resolution (the variance of pixels darker
+//! than ~10⁻⁵ is coarse), the mean 2⁻⁶².
 
 use crate::image::Layers;
 use crate::integrator::FirstHit;
@@ -30,19 +36,55 @@ impl AovSet {
     }
 }
 
-/// Accumulated samples of one pixel.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct PixelSum {
-    sum: [f64; 3],
-    sum_sq: [f64; 3],
+/// Fixed-point conversions of samples (see the module docs).
+pub struct Fixed;
+
+impl Fixed {
+    /// Fractional bits of a value.
+    pub const VALUE: i32 = 62;
+    /// Fractional bits of a squared value.
+    pub const SQUARE: i32 = 32;
+    /// Largest magnitude a sample keeps.
+    pub const LIMIT: f64 = (1u64 << 31) as f64;
+
+    /// `x` × 2^`frac`, truncated towards zero, as an integer; `x` clamped to ±2³¹ (±LIMIT²
+    /// for a square), NaN as 0. Exact bit arithmetic on the f64, no float-to-i128 call.
+    #[inline]
+    pub fn of(x: f64, frac: i32, limit: f64) -> i128 {
+        let x = if x.is_nan() { 0.0 } else { x.clamp(-limit, limit) };
+        let bits = x.to_bits();
+        let exp = ((bits >> 52) & 0x7ff) as i32;
+        if exp == 0 {
+            return 0; // zero or subnormal: far below the resolution
+        }
+        let mantissa = ((bits & ((1 << 52) - 1)) | (1 << 52)) as i128;
+        // x = mantissa · 2^(exp − 1075)
+        let shift = exp - 1075 + frac;
+        let q = if shift >= 0 { mantissa << shift } else if shift > -64 { mantissa >> -shift } else { 0 };
+        if bits >> 63 != 0 { -q } else { q }
+    }
+
+    /// A fixed-point integer with `frac` fractional bits back as a float.
+    #[inline]
+    pub fn to_f64(q: i128, frac: i32) -> f64 {
+        q as f64 * (-frac as f64).exp2()
+    }
 }
 
-/// Accumulated first-hit data of one pixel.
-#[derive(Clone, Copy, Debug, Default)]
+/// Accumulated samples of one pixel: Σx and Σx² per channel, in fixed point.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PixelSum {
+    sum: [i128; 3],
+    sum_sq: [i128; 3],
+}
+
+/// Accumulated first-hit data of one pixel, in fixed point with [`Fixed::SQUARE`] bits:
+/// albedo, normal, depth.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct AovSum {
-    albedo: Vec3A,
-    normal: Vec3A,
-    depth: f32,
+    albedo: [i128; 3],
+    normal: [i128; 3],
+    depth: i128,
 }
 
 impl PixelSum {
@@ -51,8 +93,15 @@ impl PixelSum {
     pub fn add(&mut self, v: Rgb) {
         for c in 0..3 {
             let x = v[c] as f64;
-            self.sum[c] += x;
-            self.sum_sq[c] += x * x;
+            self.sum[c] += Fixed::of(x, Fixed::VALUE, Fixed::LIMIT);
+            self.sum_sq[c] += Fixed::of(x * x, Fixed::SQUARE, Fixed::LIMIT * Fixed::LIMIT);
+        }
+    }
+
+    fn merge(&mut self, o: &PixelSum) {
+        for c in 0..3 {
+            self.sum[c] += o.sum[c];
+            self.sum_sq[c] += o.sum_sq[c];
         }
     }
 }
@@ -62,10 +111,27 @@ impl AovSum {
     #[inline]
     pub fn add(&mut self, hit: Option<FirstHit>) {
         if let Some(h) = hit {
-            self.albedo += h.albedo;
-            self.normal += h.normal;
-            self.depth += h.depth;
+            let q = |x: f32| Fixed::of(x as f64, Fixed::SQUARE, Fixed::LIMIT);
+            for c in 0..3 {
+                self.albedo[c] += q(h.albedo[c]);
+                self.normal[c] += q(h.normal[c]);
+            }
+            self.depth += q(h.depth);
         }
+    }
+
+    fn merge(&mut self, o: &AovSum) {
+        for c in 0..3 {
+            self.albedo[c] += o.albedo[c];
+            self.normal[c] += o.normal[c];
+        }
+        self.depth += o.depth;
+    }
+
+    /// The sums as floats: (albedo, normal, depth).
+    fn floats(&self) -> (Vec3A, Vec3A, f32) {
+        let f = |q: i128| Fixed::to_f64(q, Fixed::SQUARE) as f32;
+        (Vec3A::from(self.albedo.map(f)), Vec3A::from(self.normal.map(f)), f(self.depth))
     }
 }
 
@@ -122,8 +188,8 @@ impl Film {
     #[inline]
     pub fn mean(&self, i: usize) -> Rgb {
         let n = self.spp.max(1) as f64;
-        let s = &self.pixels[i].sum;
-        Rgb::new((s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32)
+        let s = self.pixels[i].sum.map(|q| Fixed::to_f64(q, Fixed::VALUE) / n);
+        Rgb::new(s[0] as f32, s[1] as f32, s[2] as f32)
     }
 
     /// Variance of the mean of pixel `i`: sample variance / spp (0 below 2 samples).
@@ -134,8 +200,9 @@ impl Film {
         }
         let p = &self.pixels[i];
         let v = |c: usize| {
-            let mean = p.sum[c] / n;
-            (((p.sum_sq[c] / n - mean * mean) * n / (n - 1.0)).max(0.0) / n) as f32
+            let mean = Fixed::to_f64(p.sum[c], Fixed::VALUE) / n;
+            let mean_sq = Fixed::to_f64(p.sum_sq[c], Fixed::SQUARE) / n;
+            (((mean_sq - mean * mean) * n / (n - 1.0)).max(0.0) / n) as f32
         };
         Rgb::new(v(0), v(1), v(2))
     }
@@ -145,20 +212,16 @@ impl Film {
         (0..self.pixels.len()).map(|i| self.mean(i)).collect()
     }
 
-    /// Adds another film's samples (same size; e.g. a later range of sample indices).
+    /// Adds another film's samples (same size; e.g. another range of sample indices): the
+    /// sums become exactly those of one film that took both films' samples.
     pub fn merge(&mut self, other: &Film) {
         assert_eq!(self.size, other.size, "films of different sizes");
         for (a, b) in self.pixels.iter_mut().zip(&other.pixels) {
-            for c in 0..3 {
-                a.sum[c] += b.sum[c];
-                a.sum_sq[c] += b.sum_sq[c];
-            }
+            a.merge(b);
         }
         if let (Some(a), Some(b)) = (self.aovs.as_mut(), other.aovs.as_ref()) {
             for (x, y) in a.iter_mut().zip(b) {
-                x.albedo += y.albedo;
-                x.normal += y.normal;
-                x.depth += y.depth;
+                x.merge(y);
             }
         }
         self.spp += other.spp;
@@ -171,16 +234,17 @@ impl Film {
         layers.push_rgb("", &self.means());
         let inv = 1.0 / self.spp.max(1) as f32;
         if let Some(a) = &self.aovs {
+            let sums: Vec<(Vec3A, Vec3A, f32)> = a.iter().map(AovSum::floats).collect();
             if aovs.albedo {
-                layers.push_rgb("albedo", &a.iter().map(|p| p.albedo * inv).collect::<Vec<_>>());
+                layers.push_rgb("albedo", &sums.iter().map(|p| p.0 * inv).collect::<Vec<_>>());
             }
             if aovs.normal {
                 // averaged normals are renormalised
-                let normals: Vec<Vec3A> = a.iter().map(|p| p.normal.normalize_or_zero()).collect();
+                let normals: Vec<Vec3A> = sums.iter().map(|p| p.1.normalize_or_zero()).collect();
                 layers.push_vectors(["N.X", "N.Y", "N.Z"], &normals);
             }
             if aovs.depth {
-                layers.push("Z", a.iter().map(|p| p.depth * inv).collect());
+                layers.push("Z", sums.iter().map(|p| p.2 * inv).collect());
             }
         }
         if aovs.variance {
@@ -206,6 +270,60 @@ mod tests {
         assert_eq!(film.mean(0), Rgb::splat(2.5));
         // Sample variance 5/3, variance of the mean 5/12.
         assert!((film.variance_of_mean(0).x - 5.0 / 12.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn any_split_of_the_samples_merges_to_the_same_bits() {
+        // Values over 30 decades, both signs, the clamp and NaN: however the samples are cut
+        // into parts and in whatever order the parts merge, the sums are the same.
+        let values: Vec<f32> = (0..200)
+            .map(|i| {
+                let t = (i as f32 * 0.618).fract();
+                let v = 10f32.powf(30.0 * t - 15.0) * if i % 7 == 0 { -1.0 } else { 1.0 };
+                match i {
+                    13 => 1e12,
+                    14 => f32::NAN,
+                    _ => v,
+                }
+            })
+            .collect();
+        let film_of = |vals: &[f32]| {
+            let mut f = Film::new(UVec2::new(1, 1), true);
+            for (_, px, aov) in f.bands_mut(1) {
+                let aov = aov.unwrap();
+                for &v in vals {
+                    px[0].add(Rgb::new(v, 2.0 * v, 0.5));
+                    aov[0].add(Some(FirstHit { albedo: Rgb::splat(v.abs().min(1.0)), normal: Vec3A::Y, depth: v.abs() }));
+                }
+            }
+            f.add_spp(vals.len() as u32);
+            f
+        };
+        let whole = film_of(&values);
+        for cuts in [[1usize, 2, 199], [50, 120, 150], [0, 100, 200]] {
+            let parts = [&values[..cuts[0]], &values[cuts[0]..cuts[1]], &values[cuts[1]..cuts[2]], &values[cuts[2]..]];
+            let mut merged = film_of(parts[3]);
+            for p in parts[..3].iter().rev() {
+                merged.merge(&film_of(p));
+            }
+            assert_eq!(merged.pixels, whole.pixels);
+            assert_eq!(merged.aovs, whole.aovs);
+            assert_eq!(merged.mean(0).to_array().map(f32::to_bits), whole.mean(0).to_array().map(f32::to_bits));
+        }
+        // And the clamp holds the sums finite: the mean is the clamped value's share.
+        assert!(whole.mean(0).is_finite());
+    }
+
+    #[test]
+    fn fixed_point_keeps_values_to_its_resolution() {
+        for x in [1.0f64, -2.5, 1e-12, 3.0e9, -7.25e-3, 0.1] {
+            let q = Fixed::of(x, Fixed::VALUE, Fixed::LIMIT);
+            let back = Fixed::to_f64(q, Fixed::VALUE);
+            let expect = x.clamp(-Fixed::LIMIT, Fixed::LIMIT);
+            assert!((back - expect).abs() <= 2f64.powi(-Fixed::VALUE) + 1e-15 * expect.abs(), "{x}: {back}");
+        }
+        assert_eq!(Fixed::of(f64::NAN, Fixed::VALUE, Fixed::LIMIT), 0);
+        assert_eq!(Fixed::of(0.0, Fixed::VALUE, Fixed::LIMIT), 0);
     }
 
     #[test]
