@@ -14,7 +14,7 @@
 
 use crate::image::Layers;
 use crate::integrator::FirstHit;
-use crate::math::{Rgb, UVec2, Vec3A};
+use crate::math::{Fixed, Rgb, UVec2, Vec3A};
 
 /// Which extra images to keep.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -33,41 +33,6 @@ impl AovSet {
     /// True when a first-hit AOV is requested.
     pub fn wants_first_hit(&self) -> bool {
         self.albedo || self.normal || self.depth
-    }
-}
-
-/// Fixed-point conversions of samples (see the module docs).
-pub struct Fixed;
-
-impl Fixed {
-    /// Fractional bits of a value.
-    pub const VALUE: i32 = 62;
-    /// Fractional bits of a squared value.
-    pub const SQUARE: i32 = 32;
-    /// Largest magnitude a sample keeps.
-    pub const LIMIT: f64 = (1u64 << 31) as f64;
-
-    /// `x` × 2^`frac`, truncated towards zero, as an integer; `x` clamped to ±2³¹ (±LIMIT²
-    /// for a square), NaN as 0. Exact bit arithmetic on the f64, no float-to-i128 call.
-    #[inline]
-    pub fn of(x: f64, frac: i32, limit: f64) -> i128 {
-        let x = if x.is_nan() { 0.0 } else { x.clamp(-limit, limit) };
-        let bits = x.to_bits();
-        let exp = ((bits >> 52) & 0x7ff) as i32;
-        if exp == 0 {
-            return 0; // zero or subnormal: far below the resolution
-        }
-        let mantissa = ((bits & ((1 << 52) - 1)) | (1 << 52)) as i128;
-        // x = mantissa · 2^(exp − 1075)
-        let shift = exp - 1075 + frac;
-        let q = if shift >= 0 { mantissa << shift } else if shift > -64 { mantissa >> -shift } else { 0 };
-        if bits >> 63 != 0 { -q } else { q }
-    }
-
-    /// A fixed-point integer with `frac` fractional bits back as a float.
-    #[inline]
-    pub fn to_f64(q: i128, frac: i32) -> f64 {
-        q as f64 * (-frac as f64).exp2()
     }
 }
 
@@ -227,6 +192,57 @@ impl Film {
         self.spp += other.spp;
     }
 
+    /// Bytes of [`Film::sums_bytes`] per pixel: with or without first-hit sums.
+    pub fn bytes_per_pixel(first_hit: bool) -> usize {
+        6 * 16 + if first_hit { 7 * 16 } else { 0 }
+    }
+
+    /// Whether the film keeps first-hit (AOV) sums.
+    pub fn has_first_hit(&self) -> bool {
+        self.aovs.is_some()
+    }
+
+    /// The sums as bytes (little-endian i128s, pixel by pixel, then the AOV sums): what a
+    /// partial render stores so that a merge is exact.
+    pub fn sums_bytes(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(self.pixels.len() * Self::bytes_per_pixel(self.aovs.is_some()));
+        for p in &self.pixels {
+            for q in p.sum.iter().chain(&p.sum_sq) {
+                out.extend_from_slice(&q.to_le_bytes());
+            }
+        }
+        for a in self.aovs.iter().flatten() {
+            for q in a.albedo.iter().chain(&a.normal).chain([&a.depth]) {
+                out.extend_from_slice(&q.to_le_bytes());
+            }
+        }
+        out
+    }
+
+    /// The film whose [`sums_bytes`](Self::sums_bytes) are `bytes`, of `size` pixels and `spp`
+    /// samples; `None` when the length does not fit.
+    pub fn from_sums_bytes(size: UVec2, spp: u32, first_hit: bool, bytes: &[u8]) -> Option<Self> {
+        let n = size.x as usize * size.y as usize;
+        if bytes.len() != n.checked_mul(Self::bytes_per_pixel(first_hit))? {
+            return None;
+        }
+        let mut words = bytes.chunks_exact(16).map(|b| i128::from_le_bytes(b.try_into().expect("16 bytes")));
+        let mut next = || words.next().expect("length checked");
+        let pixels =
+            (0..n).map(|_| PixelSum { sum: [next(), next(), next()], sum_sq: [next(), next(), next()] }).collect();
+        let aovs = first_hit.then(|| {
+            (0..n)
+                .map(|_| AovSum { albedo: [next(), next(), next()], normal: [next(), next(), next()], depth: next() })
+                .collect()
+        });
+        Some(Self { size, spp, pixels, aovs })
+    }
+
+    /// Whether two films hold the same sums (the same samples, bit for bit).
+    pub fn same_sums(&self, other: &Film) -> bool {
+        self.size == other.size && self.spp == other.spp && self.pixels == other.pixels && self.aovs == other.aovs
+    }
+
     /// The output channels: R, G, B, then the AOVs asked for.
     pub fn layers(&self, aovs: AovSet) -> Layers {
         let n = self.pixels.len();
@@ -293,7 +309,11 @@ mod tests {
                 let aov = aov.unwrap();
                 for &v in vals {
                     px[0].add(Rgb::new(v, 2.0 * v, 0.5));
-                    aov[0].add(Some(FirstHit { albedo: Rgb::splat(v.abs().min(1.0)), normal: Vec3A::Y, depth: v.abs() }));
+                    aov[0].add(Some(FirstHit {
+                        albedo: Rgb::splat(v.abs().min(1.0)),
+                        normal: Vec3A::Y,
+                        depth: v.abs(),
+                    }));
                 }
             }
             f.add_spp(vals.len() as u32);
@@ -312,18 +332,6 @@ mod tests {
         }
         // And the clamp holds the sums finite: the mean is the clamped value's share.
         assert!(whole.mean(0).is_finite());
-    }
-
-    #[test]
-    fn fixed_point_keeps_values_to_its_resolution() {
-        for x in [1.0f64, -2.5, 1e-12, 3.0e9, -7.25e-3, 0.1] {
-            let q = Fixed::of(x, Fixed::VALUE, Fixed::LIMIT);
-            let back = Fixed::to_f64(q, Fixed::VALUE);
-            let expect = x.clamp(-Fixed::LIMIT, Fixed::LIMIT);
-            assert!((back - expect).abs() <= 2f64.powi(-Fixed::VALUE) + 1e-15 * expect.abs(), "{x}: {back}");
-        }
-        assert_eq!(Fixed::of(f64::NAN, Fixed::VALUE, Fixed::LIMIT), 0);
-        assert_eq!(Fixed::of(0.0, Fixed::VALUE, Fixed::LIMIT), 0);
     }
 
     #[test]

@@ -31,17 +31,30 @@ impl Fingerprint {
 
     /// Adds the path and the contents of a file.
     pub fn file(&mut self, path: &Path) -> Result<&mut Self> {
+        let label = format!("file {}", path.display());
+        self.contents(&label, path)
+    }
+
+    /// Adds the contents of a file under `label`, not its path: a copy of the file elsewhere
+    /// (another machine's checkout) adds the same.
+    pub fn contents(&mut self, label: &str, path: &Path) -> Result<&mut Self> {
         let contents = blake3::Hasher::new()
             .update_reader(std::fs::File::open(path).map_err(|e| Error::io(path, e))?)
             .map_err(|e| Error::io(path, e))?
             .finalize();
-        Ok(self.value(&format!("file {}", path.display()), contents.to_hex()))
+        Ok(self.value(label, contents.to_hex()))
     }
 
     /// The fingerprint, as 32 hex digits.
     pub fn finish(&self) -> String {
         self.0.finalize().to_hex()[..32].to_string()
     }
+}
+
+/// This version of myriad and the git revision it was built from: what a render's parts
+/// must share to merge (builds of one revision on different machines do).
+pub fn revision() -> &'static str {
+    concat!(env!("CARGO_PKG_VERSION"), " ", env!("MYRIAD_GIT_REVISION"))
 }
 
 /// This build of myriad: its version, the git revision it was built from (`unknown` outside a

@@ -61,6 +61,13 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Join the parts of a render split into sample ranges into one EXR.
+    ///
+    /// Each part comes from `myriad render SCENE --samples A..B` (on any machine, e.g. one
+    /// Slurm array task each). The parts must come from the same myriad revision, scene
+    /// contents and settings, with disjoint ranges; the image is bit-identical to one render
+    /// of all their samples.
+    Merge(MergeArgs),
     /// Load a scene and report what it holds: triangles, lights, power, build times, memory.
     Info {
         /// Scene file (.ron, .obj, .gltf or .glb); default: the built-in Cornell box.
@@ -92,8 +99,32 @@ struct RenderArgs {
     /// Extra EXR channels, comma-separated: albedo, normal, depth, variance.
     #[arg(long, value_delimiter = ',', value_parser = ["albedo", "normal", "depth", "variance"])]
     aov: Vec<String>,
+    /// Render only samples A to B−1 of every pixel (exactly the samples a full render takes
+    /// there) and write them as a part file for `myriad merge`: to -o when it ends in .part,
+    /// else beside it as NAME.samples-A-B.part. No image and no preview are written.
+    #[arg(long, value_name = "A..B", value_parser = parse_samples, conflicts_with_all = ["spp", "time"])]
+    samples: Option<(u32, u32)>,
     #[command(flatten)]
     common: CommonArgs,
+}
+
+#[derive(Args)]
+struct MergeArgs {
+    /// Part files written by `myriad render --samples A..B`, in any order.
+    #[arg(required = true)]
+    parts: Vec<PathBuf>,
+    /// Output EXR.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Also write a PNG preview beside the EXR.
+    #[arg(long)]
+    png: bool,
+    /// Exposure of the PNG preview, in stops.
+    #[arg(long, default_value_t = 0.0, value_parser = parse_exposure, allow_hyphen_values = true)]
+    exposure: f32,
+    /// Merge even when the parts' ranges leave samples out (the summary lists them).
+    #[arg(long)]
+    allow_gaps: bool,
 }
 
 #[derive(Args)]
@@ -167,6 +198,7 @@ impl CommonArgs {
         RenderRequest {
             spp: self.spp,
             time: self.time,
+            samples: None,
             sampler,
             seed: self.seed,
             max_depth: self.max_depth,
@@ -218,6 +250,18 @@ fn parse_resolution(s: &str) -> Result<UVec2, String> {
     Ok(UVec2::new(w, h))
 }
 
+fn parse_samples(s: &str) -> Result<(u32, u32), String> {
+    let (a, b) = s.split_once("..").ok_or_else(|| format!("'{s}' is not a sample range A..B, e.g. 0..16"))?;
+    let (a, b): (u32, u32) = (
+        a.trim().parse().map_err(|_| format!("'{a}' is not a sample index"))?,
+        b.trim().parse().map_err(|_| format!("'{b}' is not a sample index"))?,
+    );
+    if a >= b {
+        return Err(format!("{a}..{b} holds no samples: A must be below B"));
+    }
+    Ok((a, b))
+}
+
 fn parse_exposure(s: &str) -> Result<f32, String> {
     let v: f32 = s.parse().map_err(|_| format!("'{s}' is not a number of stops"))?;
     if v.is_finite() && v.abs() <= 64.0 { Ok(v) } else { Err("the exposure must be between -64 and 64 stops".into()) }
@@ -242,6 +286,13 @@ fn run(cli: Cli) -> myriad::Result<ExitCode> {
     match cli.command {
         Command::Render(a) => return render(a),
         Command::Compare(a) => compare(a)?,
+        Command::Merge(a) => say(commands::merge::merge(&commands::merge::MergeOptions {
+            parts: a.parts,
+            output: a.output,
+            png: a.png,
+            exposure: a.exposure,
+            allow_gaps: a.allow_gaps,
+        })?),
         Command::Diff { image, reference, out } => say(diff(&image, &reference, out.as_deref())?),
         Command::Info { scene, camera, load } => {
             let options = SceneOptions { load: load.options(), build: BuildOptions { resolution: None, camera } };
@@ -258,7 +309,7 @@ fn render(a: RenderArgs) -> myriad::Result<ExitCode> {
         output: a.output,
         png: a.png,
         no_png: a.no_png,
-        settings: a.common.request(a.sampler),
+        settings: RenderRequest { samples: a.samples, ..a.common.request(a.sampler) },
         resolution: a.common.resolution,
         camera: a.common.camera,
         aovs: AovSet { albedo: has("albedo"), normal: has("normal"), depth: has("depth"), variance: has("variance") },

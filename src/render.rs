@@ -30,10 +30,24 @@ const MAX_PASS: Duration = Duration::from_secs(1);
 /// How long to render.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Budget {
-    /// Exactly this many samples per pixel.
+    /// Exactly this many samples per pixel: samples `0..n`.
     Spp(u32),
+    /// Samples `first..end` of every pixel (`first < end`), the very samples a render of
+    /// `end` spp takes there: a part of a render split into sample ranges.
+    Samples(u32, u32),
     /// Whole passes over the image until this much time is spent (at least one sample).
     Time(Duration),
+}
+
+impl Budget {
+    /// The first sample index and the samples per pixel of a fixed budget.
+    pub fn fixed(&self) -> Option<(u32, u32)> {
+        match *self {
+            Budget::Spp(n) => Some((0, n)),
+            Budget::Samples(a, b) => Some((a, b.saturating_sub(a))),
+            Budget::Time(_) => None,
+        }
+    }
 }
 
 /// What to render and how.
@@ -202,7 +216,11 @@ fn render_pass(
 /// in passes of at most [`MAX_PASS`]; an equal-time one runs passes of about 1/20 of its
 /// budget and stops when the next would overshoot by more than half a pass.
 fn next_pass(budget: Budget, done: u32, per_spp: Option<Duration>, elapsed: Duration) -> Option<u32> {
-    let Some(per_spp) = per_spp.filter(|_| done > 0) else { return Some(1) };
+    let budget = match budget.fixed() {
+        Some((_, n)) => Budget::Spp(n),
+        None => budget,
+    };
+    let Some(per_spp) = per_spp.filter(|_| done > 0) else { return (budget != Budget::Spp(0)).then_some(1) };
     let per_spp = per_spp.as_secs_f64().max(1e-9);
     match budget {
         Budget::Spp(n) if done >= n => None,
@@ -216,6 +234,46 @@ fn next_pass(budget: Budget, done: u32, per_spp: Option<Duration>, elapsed: Dura
             let chunk = (limit.as_secs_f64() / 20.0 / per_spp).max(1.0);
             (fits >= 0.5).then(|| fits.min(chunk).round().clamp(1.0, (u32::MAX - done) as f64) as u32)
         }
+        Budget::Samples(..) => unreachable!("made a Spp budget above"),
+    }
+}
+
+/// A strategy that learns, and what its light samples saw since it last learned.
+struct Learner {
+    strategy: LightStrategy,
+    pending: Vec<Observations>,
+}
+
+impl Learner {
+    /// Whether a pass starting at sample `first` must record what its light samples see.
+    fn wants(&self, first: u32) -> bool {
+        first < LEARN_UNTIL
+    }
+
+    /// Takes a pass's observations; learns from everything since the last time when the pass
+    /// ended at a power of two (within [`LEARN_UNTIL`]), so the state is a function of the
+    /// samples alone, not of how passes split them.
+    fn after_pass(&mut self, seen: Vec<Observations>, end: u32) {
+        self.pending.extend(seen);
+        if end.is_power_of_two() && end <= LEARN_UNTIL {
+            self.strategy.learn(std::mem::take(&mut self.pending));
+        }
+    }
+
+    /// Renders samples `0..end` into a film that is then dropped: the state (learned and
+    /// pending) a render of a sample range starting at `end` needs (see
+    /// `light_sampler::learned`).
+    fn train(&mut self, scene: &Scene, settings: &RenderSettings, end: u32) -> RayCounters {
+        let mut film = Film::new(settings.resolution, false);
+        let mut rays = RayCounters::default();
+        while film.spp() < end {
+            let first = film.spp();
+            let count = ((first + 1).next_power_of_two() - first).min(end - first);
+            let pass = render_pass(scene, &self.strategy, settings, &mut film, first, count, true, None);
+            rays.add(&pass.rays);
+            self.after_pass(pass.seen, first + count);
+        }
+        rays
     }
 }
 
@@ -237,27 +295,32 @@ pub fn render(
     let mut film = Film::new(size, settings.aovs.wants_first_hit());
     let mut stats = RenderStats::default();
     let start = Instant::now();
-    observer.start(match settings.budget {
-        Budget::Spp(n) => pixels * n as u64,
-        Budget::Time(limit) => limit.as_millis() as u64,
+    let fixed = settings.budget.fixed();
+    observer.start(match (fixed, settings.budget) {
+        (Some((_, n)), _) => pixels * n as u64,
+        (None, Budget::Time(limit)) => limit.as_millis() as u64,
+        (None, _) => unreachable!("a budget without spp is a time"),
     });
     let (mut per_spp, mut reported_ms) = (None, 0);
-    let mut learner = strategy.fresh_learner();
+    let offset = fixed.map_or(0, |f| f.0);
+    let mut learner = strategy.fresh_learner().map(|strategy| Learner { strategy, pending: Vec::new() });
+    if let Some(l) = learner.as_mut().filter(|_| offset > 0) {
+        stats.rays.add(&l.train(scene, settings, offset.min(LEARN_UNTIL)));
+    }
     while let Some(mut count) = next_pass(settings.budget, film.spp(), per_spp, start.elapsed()) {
         let t0 = Instant::now();
-        let fixed = matches!(settings.budget, Budget::Spp(_));
-        let first = film.spp();
-        let learning = learner.is_some() && first < LEARN_UNTIL;
+        let first = offset + film.spp();
+        let learning = learner.as_ref().is_some_and(|l| l.wants(first));
         if learning {
             count = count.min((first + 1).next_power_of_two() - first);
         }
-        let progress = Some(&*observer).filter(|_| fixed);
-        let current = learner.as_ref().unwrap_or(strategy);
+        let progress = Some(&*observer).filter(|_| fixed.is_some());
+        let current = learner.as_ref().map_or(strategy, |l| &l.strategy);
         let pass = render_pass(scene, current, settings, &mut film, first, count, learning, progress);
         stats.rays.add(&pass.rays);
         stats.non_finite_samples += pass.non_finite;
         if let Some(l) = learner.as_mut().filter(|_| learning) {
-            l.learn(pass.seen);
+            l.after_pass(pass.seen, first + count);
         }
         per_spp = Some(t0.elapsed() / count);
         stats.stopped = interrupt::requested();
@@ -275,7 +338,7 @@ pub fn render(
         }
     }
     stats.elapsed = start.elapsed();
-    stats.learned = learner.as_ref().and_then(|l| l.learner()).map(|l| l.stats());
+    stats.learned = learner.as_ref().and_then(|l| l.strategy.learner()).map(|l| l.stats());
     stats.spp = film.spp();
     stats.samples = pixels * film.spp() as u64;
     RenderOutput { film, stats }

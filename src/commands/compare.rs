@@ -218,7 +218,8 @@ impl Plan {
 
     fn mode(&self) -> String {
         match self.budget {
-            Budget::Spp(n) => format!("equal spp ({n})"),
+            Budget::Spp(n) | Budget::Samples(0, n) => format!("equal spp ({n})"),
+            Budget::Samples(a, b) => format!("equal samples ({a}..{b})"),
             Budget::Time(t) => format!("equal time ({} s)", t.as_secs_f64()),
         }
     }

@@ -8,6 +8,7 @@
 pub mod compare;
 pub mod diff;
 pub mod info;
+pub mod merge;
 pub mod progress;
 pub mod render;
 pub mod settings;

@@ -90,9 +90,20 @@ pub fn provenance(
 /// Loads, renders and writes the outputs. Output paths are checked before rendering, so a
 /// bad path fails in milliseconds, not after the render.
 pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
-    let png = (!opts.no_png).then(|| opts.png.clone().unwrap_or_else(|| super::preview_path(&opts.output)));
-    check_outputs(&opts.output, png.as_deref())?;
-    crate::io::check_writable(&opts.output)?;
+    // A sample range writes a part for `merge`, no image.
+    let part = match opts.settings.samples {
+        Some((a, b)) if a >= b => {
+            return Err(Error::Usage(format!("--samples {a}..{b} is empty: give A..B with A < B")));
+        }
+        Some(range) => Some((range, super::merge::part_path(&opts.output, range))),
+        None => None,
+    };
+    let png =
+        (!opts.no_png && part.is_none()).then(|| opts.png.clone().unwrap_or_else(|| super::preview_path(&opts.output)));
+    if part.is_none() {
+        check_outputs(&opts.output, png.as_deref())?;
+    }
+    crate::io::check_writable(part.as_ref().map_or(&opts.output, |p| &p.1))?;
     if let Some(p) = &png {
         crate::io::check_writable(p)?;
     }
@@ -114,6 +125,7 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
         let res = settings.resolution;
         let budget = match settings.budget {
             Budget::Spp(n) => format!("{n} spp"),
+            Budget::Samples(a, b) => format!("samples {a}..{b}"),
             Budget::Time(t) => format!("{} s", t.as_secs_f64()),
         };
         // On stderr, beside the progress bar; a closed stderr does not stop the render.
@@ -131,10 +143,17 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
     }
 
     let scene_name = opts.scene.as_deref().map_or(DEFAULT_SCENE_NAME.to_string(), |p| p.display().to_string());
-    let meta = provenance(&scene_name, sampler, &settings, &output.stats);
     let mut written = Vec::new();
-    crate::io::exr::write(&opts.output, &output.film.layers(settings.aovs), &meta)?;
-    written.push(opts.output.clone());
+    if let Some((range, path)) = part {
+        let hash = super::merge::scene_fingerprint(&loaded, &scene_options)?;
+        let header = super::merge::part_header(&scene_name, hash, sampler, &settings, range, &output.stats);
+        crate::io::part::write(&path, &header, &output.film)?;
+        written.push(path);
+    } else {
+        let meta = provenance(&scene_name, sampler, &settings, &output.stats);
+        crate::io::exr::write(&opts.output, &output.film.layers(settings.aovs), &meta)?;
+        written.push(opts.output.clone());
+    }
     if let Some(p) = png {
         crate::io::png::write(&p, output.film.size(), &output.film.means(), opts.exposure)?;
         written.push(p);

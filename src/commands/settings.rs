@@ -28,6 +28,8 @@ pub struct RenderRequest {
     pub spp: Option<u32>,
     /// Render for this long (whole passes) instead of a fixed spp; wins over any spp.
     pub time: Option<Duration>,
+    /// Render samples `first..end` of every pixel (a part of a split render) instead.
+    pub samples: Option<(u32, u32)>,
     /// Light sampler.
     pub sampler: Option<LightSamplerKind>,
     /// Random seed (`compare`: its runs use the seeds after it).
@@ -63,6 +65,7 @@ impl RenderRequest {
     /// `default_spp` is the command's own ([`DEFAULT_SPP`], [`COMPARE_DEFAULT_SPP`]).
     pub fn resolve(&self, scene: &RenderDefaults, default_spp: u32) -> Result<Resolved> {
         let budget = match (self.time, self.spp.or(scene.spp)) {
+            _ if let Some((a, b)) = self.samples => Budget::Samples(a, b),
             (Some(t), _) => Budget::Time(t),
             (None, Some(0)) => return Err(Error::Usage("--spp must be at least 1".into())),
             (None, spp) => Budget::Spp(spp.unwrap_or(default_spp)),

@@ -10,6 +10,7 @@ pub mod exr;
 pub mod gltf;
 pub mod image_file;
 pub mod obj;
+pub mod part;
 pub mod png;
 pub mod ron;
 

@@ -21,8 +21,9 @@
 //!
 //! **Deterministic and mergeable.** The factors change only between passes, at sample
 //! counts 1, 2, 4, … up to [`LEARN_UNTIL`] per pixel, from every sample before that count;
-//! observations are summed per band of rows and the bands are merged in image order, so the
-//! image does not depend on the thread count. Samples from [`LEARN_UNTIL`] on all use the
+//! observations are summed per band of rows in fixed point, so however the samples were
+//! grouped into passes and bands the sums are the same bits, and the image depends neither
+//! on the thread count nor on the pass sizes. Samples from [`LEARN_UNTIL`] on all use the
 //! factors learned from samples `0..LEARN_UNTIL`: a render of samples `a..b` needs exactly
 //! that state when `a ≥ LEARN_UNTIL` (samples `0..LEARN_UNTIL` rendered first, their
 //! image discarded), and for `a` below it the states at each power of two up to `b`.
@@ -35,6 +36,7 @@ use std::time::{Duration, Instant};
 use super::tree::{Frontier, LightTree, Reweight, WIDTH};
 use super::{LightSampler, SampledLight, ShadingContext};
 use crate::light::{Light, LightId};
+use crate::math::Fixed;
 use crate::sampling::fmix64;
 
 /// Levels of the tree whose choices are learned (up to 4³ = 64 clusters).
@@ -73,13 +75,14 @@ impl Hasher for KeyHasher {
 
 type KeyMap<V> = HashMap<u64, V, BuildHasherDefault<KeyHasher>>;
 
-/// Sums for one cluster seen from one cell.
+/// Sums for one cluster seen from one cell, in fixed point ([`Fixed`]), so that observations
+/// merged in any grouping give the same bits.
 #[derive(Clone, Copy, Debug, Default)]
 struct Sums {
     /// Σ c · visible.
-    arrived: f64,
+    arrived: i128,
     /// Σ c.
-    offered: f64,
+    offered: i128,
     /// Samples.
     n: u32,
 }
@@ -275,8 +278,9 @@ impl LearnedSampler {
         }
         let cluster = self.frontier.cluster[light.0 as usize] as usize;
         let s = &mut seen.row(self.key(ctx), self.frontier.clusters as usize)[cluster];
-        s.offered += c as f64;
-        s.arrived += if visible { c as f64 } else { 0.0 };
+        let q = Fixed::of(c as f64, Fixed::SQUARE, Fixed::LIMIT);
+        s.offered += q;
+        s.arrived += if visible { q } else { 0 };
         s.n += 1;
     }
 
@@ -316,7 +320,7 @@ impl LearnedSampler {
                     for c in &sums[a as usize..b as usize] {
                         s.add(c);
                     }
-                    let r = if s.offered > 0.0 { (s.arrived / s.offered) as f32 } else { 1.0 };
+                    let r = if s.offered > 0 { (s.arrived as f64 / s.offered as f64) as f32 } else { 1.0 };
                     let n = s.n as f32;
                     (n * r + PRIOR) / (n + PRIOR)
                 });

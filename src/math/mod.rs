@@ -4,9 +4,11 @@
 //! few scalar helpers. Depends on nothing else in the crate.
 
 pub mod distribution;
+mod fixed;
 pub mod frame;
 pub mod warp;
 
+pub use fixed::Fixed;
 pub use glam::{Mat3, Mat4, UVec2, Vec2, Vec3, Vec3A, Vec4};
 
 /// Linear Rec.709 RGB radiometric quantity (radiance, albedo, throughput…).

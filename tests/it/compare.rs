@@ -18,13 +18,10 @@ fn options(out_dir: &Path, samplers: Vec<LightSamplerKind>, budget: Budget) -> C
         scene: scene(),
         samplers: Some(samplers),
         settings: RenderRequest {
-            spp: match budget {
-                Budget::Spp(n) => Some(n),
-                Budget::Time(_) => None,
-            },
+            spp: budget.fixed().map(|(_, n)| n),
             time: match budget {
                 Budget::Time(t) => Some(t),
-                Budget::Spp(_) => None,
+                _ => None,
             },
             max_depth: Some(3),
             ..Default::default()

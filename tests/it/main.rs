@@ -11,3 +11,4 @@ mod light_samplers;
 mod mutation;
 mod render;
 mod scene_loading;
+mod split;

@@ -1,0 +1,246 @@
+//! Renders split into sample ranges: the part a `render --samples A..B` writes, and
+//! `myriad merge`, which joins parts into the image one render of all their samples makes.
+//!
+//! Every random number is addressed by (seed, pixel, sample, bounce, dimension) and the film
+//! sums in fixed point, so a part holds exactly the sums samples `A..B` add to a full render;
+//! a merge checks that the parts belong together (same myriad revision, scene contents and
+//! settings; disjoint ranges; no gap unless allowed) and adds them.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use super::{LoadedScene, SceneOptions, preview_path};
+use crate::error::{Error, Result};
+use crate::film::{AovSet, Film};
+use crate::fingerprint::{Fingerprint, revision};
+use crate::io::part::{self, PartHeader};
+use crate::render::{RenderSettings, RenderStats};
+use crate::settings::LightSamplerKind;
+
+/// Where the part of samples `a..b` goes for `-o output`: `output` itself when it ends in
+/// `.part`, else beside it as `<stem>.samples-A-B.part`.
+pub fn part_path(output: &Path, (a, b): (u32, u32)) -> PathBuf {
+    if output.extension().is_some_and(|e| e.eq_ignore_ascii_case("part")) {
+        return output.to_path_buf();
+    }
+    let stem = output.file_stem().map_or("myriad".into(), |s| s.to_string_lossy().into_owned());
+    output.with_file_name(format!("{stem}.samples-{a}-{b}.part"))
+}
+
+/// Fingerprint of the scene a render sees: the contents of every file it read (not their
+/// paths, so another machine's copy matches), how it was read, the camera and the size.
+pub fn scene_fingerprint(loaded: &LoadedScene, options: &SceneOptions) -> Result<String> {
+    let mut key = Fingerprint::new("myriad scene");
+    for (i, input) in loaded.report.inputs.iter().enumerate() {
+        key.contents(&format!("input {i}"), input)?;
+    }
+    let size = loaded.report.resolution;
+    key.value("gltf_scene", format!("{:?}", options.load.gltf_scene))
+        .value("punctual_scale", options.load.punctual_scale.to_bits())
+        .value("camera", options.build.camera.as_deref().unwrap_or("-"))
+        .value("resolution", format!("{}x{}", size.x, size.y));
+    Ok(key.finish())
+}
+
+/// The names of the AOVs a set keeps.
+fn aov_names(aovs: AovSet) -> Vec<String> {
+    [("albedo", aovs.albedo), ("normal", aovs.normal), ("depth", aovs.depth), ("variance", aovs.variance)]
+        .into_iter()
+        .filter(|(_, on)| *on)
+        .map(|(n, _)| n.to_string())
+        .collect()
+}
+
+/// The header of the part a render of samples `samples` wrote.
+pub fn part_header(
+    scene: &str,
+    scene_hash: String,
+    sampler: LightSamplerKind,
+    settings: &RenderSettings,
+    samples: (u32, u32),
+    stats: &RenderStats,
+) -> PartHeader {
+    PartHeader {
+        myriad: revision().to_string(),
+        scene: scene.to_string(),
+        scene_hash,
+        sampler: sampler.name().to_string(),
+        seed: settings.seed,
+        max_depth: settings.max_depth,
+        resolution: settings.resolution.to_array(),
+        aovs: aov_names(settings.aovs),
+        samples: [samples.0, samples.1],
+        render_seconds: stats.elapsed.as_secs_f64(),
+    }
+}
+
+/// What to merge.
+#[derive(Clone, Debug)]
+pub struct MergeOptions {
+    /// Part files, in any order.
+    pub parts: Vec<PathBuf>,
+    /// EXR output.
+    pub output: PathBuf,
+    /// Also write a PNG preview beside it.
+    pub png: bool,
+    /// PNG exposure in stops.
+    pub exposure: f32,
+    /// Merge parts whose ranges leave samples out (reported) instead of refusing.
+    pub allow_gaps: bool,
+}
+
+/// What a merge did, for the summary.
+#[derive(Debug)]
+pub struct MergeReport {
+    /// The parts' common header (first part's scene name, the merged range's ends).
+    pub header: PartHeader,
+    /// Sample ranges merged, in order.
+    pub ranges: Ranges,
+    /// Ranges no part held, when gaps were allowed.
+    pub gaps: Ranges,
+    /// Files written.
+    pub written: Vec<PathBuf>,
+}
+
+/// Reads, checks and merges the parts, and writes the image.
+pub fn merge(opts: &MergeOptions) -> Result<MergeReport> {
+    let png = opts.png.then(|| preview_path(&opts.output));
+    crate::io::check_writable(&opts.output)?;
+    if let Some(p) = &png {
+        crate::io::check_writable(p)?;
+    }
+    let mut parts = Vec::with_capacity(opts.parts.len());
+    for path in &opts.parts {
+        let (header, film) = part::read(path)?;
+        parts.push((path.clone(), header, film));
+    }
+    let Some((first_path, first, _)) = parts.first() else {
+        return Err(Error::Usage("merge needs at least one part file".into()));
+    };
+    let identity = first.render_identity();
+    for (path, h, _) in &parts[1..] {
+        if h.render_identity() != identity {
+            return Err(Error::Input {
+                path: path.clone(),
+                message: format!(
+                    "does not belong with {}: {}; render every part with the same myriad, scene and settings",
+                    first_path.display(),
+                    difference(first, h)
+                ),
+            });
+        }
+    }
+    parts.sort_by_key(|(_, h, _)| h.samples);
+    let (ranges, gaps) = check_ranges(&parts, opts.allow_gaps)?;
+    let mut header = parts[0].1.clone();
+    header.samples = [ranges[0].0, ranges.last().expect("one part at least").1];
+    let mut iter = parts.into_iter().map(|(_, _, film)| film);
+    let mut film = iter.next().expect("one part at least");
+    for f in iter {
+        film.merge(&f);
+    }
+    let written = write_merged(opts, &header, &film, png)?;
+    Ok(MergeReport { header, ranges, gaps, written })
+}
+
+/// Sample ranges `first..end`.
+type Ranges = Vec<(u32, u32)>;
+
+/// The sample ranges of the sorted parts, and the gaps between them; an overlap is an
+/// error, and so is a gap unless `allow_gaps`.
+fn check_ranges(parts: &[(PathBuf, PartHeader, Film)], allow_gaps: bool) -> Result<(Ranges, Ranges)> {
+    let ranges: Vec<(u32, u32)> = parts.iter().map(|(_, h, _)| (h.samples[0], h.samples[1])).collect();
+    let mut gaps = Vec::new();
+    if ranges[0].0 > 0 {
+        gaps.push((0, ranges[0].0));
+    }
+    for (i, w) in ranges.windows(2).enumerate() {
+        let ((a0, a1), (b0, b1)) = (w[0], w[1]);
+        if b0 < a1 {
+            return Err(Error::Input {
+                path: parts[i + 1].0.clone(),
+                message: format!(
+                    "holds samples {b0}..{b1}, which overlap {a0}..{a1} of {}: each sample may be merged once",
+                    parts[i].0.display()
+                ),
+            });
+        }
+        if b0 > a1 {
+            gaps.push((a1, b0));
+        }
+    }
+    if !gaps.is_empty() && !allow_gaps {
+        let list: Vec<String> = gaps.iter().map(|(a, b)| format!("{a}..{b}")).collect();
+        return Err(Error::Usage(format!(
+            "no part holds samples {}: render them (myriad render ... --samples A..B), or pass --allow-gaps to \
+             merge what there is",
+            list.join(", ")
+        )));
+    }
+    Ok((ranges, gaps))
+}
+
+/// What differs between two parts' identities, for the message.
+fn difference(a: &PartHeader, b: &PartHeader) -> String {
+    let fields = [
+        ("myriad", a.myriad.clone(), b.myriad.clone()),
+        ("scene contents", a.scene_hash.clone(), b.scene_hash.clone()),
+        ("sampler", a.sampler.clone(), b.sampler.clone()),
+        ("seed", a.seed.to_string(), b.seed.to_string()),
+        ("max depth", a.max_depth.to_string(), b.max_depth.to_string()),
+        ("resolution", format!("{:?}", a.resolution), format!("{:?}", b.resolution)),
+        ("AOVs", a.aovs.join(","), b.aovs.join(",")),
+    ];
+    let diffs: Vec<String> =
+        fields.into_iter().filter(|(_, x, y)| x != y).map(|(n, x, y)| format!("{n} {y} (not {x})")).collect();
+    diffs.join(", ")
+}
+
+/// Writes the merged image (EXR with the provenance a render writes, and the preview).
+fn write_merged(opts: &MergeOptions, header: &PartHeader, film: &Film, png: Option<PathBuf>) -> Result<Vec<PathBuf>> {
+    let aovs = AovSet {
+        albedo: header.aovs.iter().any(|a| a == "albedo"),
+        normal: header.aovs.iter().any(|a| a == "normal"),
+        depth: header.aovs.iter().any(|a| a == "depth"),
+        variance: header.aovs.iter().any(|a| a == "variance"),
+    };
+    let meta: Vec<(String, String)> = [
+        ("myriad.revision", header.myriad.clone()),
+        ("myriad.scene", header.scene.clone()),
+        ("myriad.sampler", header.sampler.clone()),
+        ("myriad.spp", film.spp().to_string()),
+        ("myriad.seed", header.seed.to_string()),
+        ("myriad.max_depth", header.max_depth.to_string()),
+        ("myriad.samples", format!("{}..{}", header.samples[0], header.samples[1])),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect();
+    crate::io::exr::write(&opts.output, &film.layers(aovs), &meta)?;
+    let mut written = vec![opts.output.clone()];
+    if let Some(p) = png {
+        crate::io::png::write(&p, film.size(), &film.means(), opts.exposure)?;
+        written.push(p);
+    }
+    Ok(written)
+}
+
+impl fmt::Display for MergeReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let h = &self.header;
+        let ranges: Vec<String> = self.ranges.iter().map(|(a, b)| format!("{a}..{b}")).collect();
+        writeln!(f, "merged     {} parts of {} ({})", self.ranges.len(), h.scene, ranges.join(", "))?;
+        let spp: u32 = self.ranges.iter().map(|(a, b)| b - a).sum();
+        writeln!(
+            f,
+            "image      {} × {}, {spp} spp, sampler {}, seed {}, max depth {}",
+            h.resolution[0], h.resolution[1], h.sampler, h.seed, h.max_depth
+        )?;
+        if !self.gaps.is_empty() {
+            let gaps: Vec<String> = self.gaps.iter().map(|(a, b)| format!("{a}..{b}")).collect();
+            writeln!(f, "gaps       samples {} are missing (--allow-gaps)", gaps.join(", "))?;
+        }
+        let written: Vec<String> = self.written.iter().map(|p| p.display().to_string()).collect();
+        write!(f, "wrote      {}", written.join(", "))
+    }
+}
