@@ -68,6 +68,13 @@ enum Command {
     /// contents and settings, with disjoint ranges; the image is bit-identical to one render
     /// of all their samples.
     Merge(MergeArgs),
+    /// Write (and with --submit, submit) a render as a Slurm job array and a merge job.
+    ///
+    /// Task i of the array renders its range of the samples (`render --samples`) to
+    /// OUT/parts/part-i.part; the merge job, which waits for every task (afterok), joins them
+    /// into OUT/SCENE.exr, bit-identical to one render. The scene, the myriad binary and OUT
+    /// must be on a file system every node sees.
+    Slurm(SlurmArgs),
     /// Load a scene and report what it holds: triangles, lights, power, build times, memory.
     Info {
         /// Scene file (.ron, .obj, .gltf or .glb); default: the built-in Cornell box.
@@ -106,6 +113,73 @@ struct RenderArgs {
     samples: Option<(u32, u32)>,
     #[command(flatten)]
     common: CommonArgs,
+}
+
+#[derive(Args)]
+struct SlurmArgs {
+    /// Scene file (.ron, .obj, .gltf or .glb).
+    scene: PathBuf,
+    /// Samples per pixel of the whole render.
+    #[arg(long)]
+    spp: u32,
+    /// Array tasks: the samples are cut into this many ranges.
+    #[arg(long)]
+    tasks: u32,
+    /// Job folder (default: slurm-<scene name>).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Submit both jobs with sbatch and print their ids.
+    #[arg(long)]
+    submit: bool,
+    /// sbatch --partition for both jobs.
+    #[arg(long)]
+    partition: Option<String>,
+    /// sbatch --time (Slurm's time limit per job, e.g. 1:00:00).
+    #[arg(long)]
+    time: Option<String>,
+    /// sbatch --cpus-per-task; each task renders with that many threads.
+    #[arg(long)]
+    cpus_per_task: Option<u32>,
+    /// sbatch --mem per task (e.g. 4G).
+    #[arg(long)]
+    mem: Option<String>,
+    /// Light sampler of the render.
+    #[arg(long, value_parser = sampler_parser())]
+    sampler: Option<LightSamplerKind>,
+    /// Random seed.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Maximum scattering events.
+    #[arg(long)]
+    max_depth: Option<u32>,
+    /// Output size, e.g. 640x480.
+    #[arg(long, value_parser = parse_resolution)]
+    resolution: Option<UVec2>,
+    /// Camera, by name.
+    #[arg(long)]
+    camera: Option<String>,
+    /// Extra EXR channels, comma-separated: albedo, normal, depth, variance.
+    #[arg(long, value_delimiter = ',', value_parser = ["albedo", "normal", "depth", "variance"])]
+    aov: Vec<String>,
+}
+
+impl SlurmArgs {
+    /// The `render` flags every task passes on.
+    fn render_args(&self) -> Vec<String> {
+        let mut a = Vec::new();
+        let mut flag = |name: &str, value: Option<String>| {
+            if let Some(v) = value {
+                a.extend([format!("--{name}"), v]);
+            }
+        };
+        flag("sampler", self.sampler.map(|s| s.name().to_string()));
+        flag("seed", self.seed.map(|s| s.to_string()));
+        flag("max-depth", self.max_depth.map(|d| d.to_string()));
+        flag("resolution", self.resolution.map(|r| format!("{}x{}", r.x, r.y)));
+        flag("camera", self.camera.clone());
+        flag("aov", (!self.aov.is_empty()).then(|| self.aov.join(",")));
+        a
+    }
 }
 
 #[derive(Args)]
@@ -286,6 +360,23 @@ fn run(cli: Cli) -> myriad::Result<ExitCode> {
     match cli.command {
         Command::Render(a) => return render(a),
         Command::Compare(a) => compare(a)?,
+        Command::Slurm(a) => {
+            let out = a.out.clone().unwrap_or_else(|| {
+                PathBuf::from(format!("slurm-{}", a.scene.file_stem().map_or("scene".into(), |s| s.to_string_lossy())))
+            });
+            say(commands::slurm::slurm(&commands::slurm::SlurmOptions {
+                render_args: a.render_args(),
+                scene: a.scene,
+                spp: a.spp,
+                tasks: a.tasks,
+                out,
+                partition: a.partition,
+                time: a.time,
+                cpus_per_task: a.cpus_per_task,
+                mem: a.mem,
+                submit: a.submit,
+            })?)
+        }
         Command::Merge(a) => say(commands::merge::merge(&commands::merge::MergeOptions {
             parts: a.parts,
             output: a.output,

@@ -14,6 +14,7 @@ use crate::error::{Error, Result};
 use crate::film::{AovSet, Film};
 use crate::fingerprint::{Fingerprint, revision};
 use crate::io::part::{self, PartHeader};
+use crate::limits::check_memory;
 use crate::render::{RenderSettings, RenderStats};
 use crate::settings::LightSamplerKind;
 
@@ -109,16 +110,16 @@ pub fn merge(opts: &MergeOptions) -> Result<MergeReport> {
     if let Some(p) = &png {
         crate::io::check_writable(p)?;
     }
+    // Headers first (every check before any sums are read), then one part's sums at a time.
     let mut parts = Vec::with_capacity(opts.parts.len());
     for path in &opts.parts {
-        let (header, film) = part::read(path)?;
-        parts.push((path.clone(), header, film));
+        parts.push((path.clone(), part::read_header(path)?));
     }
-    let Some((first_path, first, _)) = parts.first() else {
+    let Some((first_path, first)) = parts.first() else {
         return Err(Error::Usage("merge needs at least one part file".into()));
     };
     let identity = first.render_identity();
-    for (path, h, _) in &parts[1..] {
+    for (path, h) in &parts[1..] {
         if h.render_identity() != identity {
             return Err(Error::Input {
                 path: path.clone(),
@@ -130,15 +131,23 @@ pub fn merge(opts: &MergeOptions) -> Result<MergeReport> {
             });
         }
     }
-    parts.sort_by_key(|(_, h, _)| h.samples);
+    parts.sort_by_key(|(_, h)| h.samples);
     let (ranges, gaps) = check_ranges(&parts, opts.allow_gaps)?;
     let mut header = parts[0].1.clone();
     header.samples = [ranges[0].0, ranges.last().expect("one part at least").1];
-    let mut iter = parts.into_iter().map(|(_, _, film)| film);
-    let mut film = iter.next().expect("one part at least");
-    for f in iter {
-        film.merge(&f);
+    let pixels = header.resolution[0] as u64 * header.resolution[1] as u64;
+    let film_bytes = pixels * Film::bytes_per_pixel(header.aovs.iter().any(|a| a != "variance")) as u64;
+    // The sum so far, the part being read, and the part's file bytes.
+    check_memory(3 * film_bytes, "merging these parts").map_err(Error::Usage)?;
+    let mut film: Option<Film> = None;
+    for (path, _) in &parts {
+        let (_, f) = part::read(path)?;
+        match film.as_mut() {
+            Some(acc) => acc.merge(&f),
+            None => film = Some(f),
+        }
     }
+    let film = film.expect("one part at least");
     let written = write_merged(opts, &header, &film, png)?;
     Ok(MergeReport { header, ranges, gaps, written })
 }
@@ -148,8 +157,8 @@ type Ranges = Vec<(u32, u32)>;
 
 /// The sample ranges of the sorted parts, and the gaps between them; an overlap is an
 /// error, and so is a gap unless `allow_gaps`.
-fn check_ranges(parts: &[(PathBuf, PartHeader, Film)], allow_gaps: bool) -> Result<(Ranges, Ranges)> {
-    let ranges: Vec<(u32, u32)> = parts.iter().map(|(_, h, _)| (h.samples[0], h.samples[1])).collect();
+fn check_ranges(parts: &[(PathBuf, PartHeader)], allow_gaps: bool) -> Result<(Ranges, Ranges)> {
+    let ranges: Ranges = parts.iter().map(|(_, h)| (h.samples[0], h.samples[1])).collect();
     let mut gaps = Vec::new();
     if ranges[0].0 > 0 {
         gaps.push((0, ranges[0].0));

@@ -12,6 +12,7 @@ pub mod merge;
 pub mod progress;
 pub mod render;
 pub mod settings;
+pub mod slurm;
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};

@@ -5,7 +5,7 @@
 //! fixed-point sums (`Film::sums_bytes`). Parts of one render merge by adding their sums, so
 //! the merged image is bit-identical to one render of the union of their sample ranges.
 
-use std::io::Write;
+use std::io::{BufRead, Read, Write};
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
@@ -72,30 +72,60 @@ pub fn write(path: &Path, header: &PartHeader, film: &Film) -> Result<()> {
     })
 }
 
-/// Reads a part file: its header and its film.
-pub fn read(path: &Path) -> Result<(PartHeader, Film)> {
-    let bad =
-        |what: String| Error::Input { path: path.to_path_buf(), message: format!("not a whole part file: {what}") };
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let rest = bytes
-        .strip_prefix(MAGIC)
-        .ok_or_else(|| bad("does not start with 'myriad part 1': not a part `myriad render --samples` wrote".into()))?;
-    let end = rest.iter().take(MAX_HEADER).position(|&b| b == b'\n').ok_or_else(|| bad("no header line".into()))?;
+fn bad(path: &Path, what: String) -> Error {
+    Error::Input { path: path.to_path_buf(), message: format!("not a whole part file: {what}") }
+}
+
+/// Reads a part file's header alone (and checks that the file is as long as it says).
+pub fn read_header(path: &Path) -> Result<PartHeader> {
+    let mut f = std::io::BufReader::new(std::fs::File::open(path).map_err(|e| Error::io(path, e))?);
+    let mut magic = vec![0u8; MAGIC.len()];
+    if f.read_exact(&mut magic).is_err() || magic != MAGIC {
+        return Err(bad(
+            path,
+            "it does not start with 'myriad part 1' (`myriad render --samples` writes parts)".into(),
+        ));
+    }
+    let mut line = Vec::new();
+    f.by_ref().take(MAX_HEADER as u64).read_until(b'\n', &mut line).map_err(|e| Error::io(path, e))?;
+    if line.pop() != Some(b'\n') {
+        return Err(bad(path, "it has no header line".into()));
+    }
     let header: PartHeader =
-        serde_json::from_slice(&rest[..end]).map_err(|e| bad(format!("its header is not readable: {e}")))?;
+        serde_json::from_slice(&line).map_err(|e| bad(path, format!("its header is not readable: {e}")))?;
     let [first, last] = header.samples;
     if first >= last {
-        return Err(bad(format!("holds samples {first}..{last}, an empty range")));
+        return Err(bad(path, format!("it holds samples {first}..{last}, an empty range")));
     }
+    let expected = sums_len(&header);
+    let file = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
+    let have = file.saturating_sub((MAGIC.len() + line.len() + 1) as u64);
+    if have != expected {
+        return Err(bad(
+            path,
+            format!(
+                "it has {have} bytes of sums for {} × {} pixels, which need {expected} (a truncated copy?)",
+                header.resolution[0], header.resolution[1]
+            ),
+        ));
+    }
+    Ok(header)
+}
+
+/// Bytes of sums a part of this header holds.
+fn sums_len(h: &PartHeader) -> u64 {
+    h.resolution[0] as u64 * h.resolution[1] as u64 * Film::bytes_per_pixel(h.first_hit()) as u64
+}
+
+/// Reads a part file: its header and its film.
+pub fn read(path: &Path) -> Result<(PartHeader, Film)> {
+    let header = read_header(path)?;
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let sums = bytes.len().checked_sub(sums_len(&header) as usize).map(|start| &bytes[start..]);
     let size = UVec2::new(header.resolution[0], header.resolution[1]);
-    Film::from_sums_bytes(size, last - first, header.first_hit(), &rest[end + 1..])
-        .map(|film| (header.clone(), film))
-        .ok_or_else(|| {
-            bad(format!(
-                "is cut short or padded: {} bytes of sums for {} × {} pixels (truncated copy?)",
-                rest.len() - end - 1,
-                size.x,
-                size.y
-            ))
-        })
+    let spp = header.samples[1] - header.samples[0];
+    let film = sums
+        .and_then(|sums| Film::from_sums_bytes(size, spp, header.first_hit(), sums))
+        .ok_or_else(|| bad(path, "it changed while it was read".into()))?;
+    Ok((header, film))
 }

@@ -11,4 +11,5 @@ mod light_samplers;
 mod mutation;
 mod render;
 mod scene_loading;
+mod slurm;
 mod split;

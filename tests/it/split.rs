@@ -8,11 +8,11 @@ use std::process::{Command, Output};
 
 use myriad::io::exr;
 
-fn myriad(args: &[&str], dir: &Path) -> Output {
+pub fn myriad(args: &[&str], dir: &Path) -> Output {
     Command::new(env!("CARGO_BIN_EXE_myriad")).args(args).current_dir(dir).output().expect("myriad runs")
 }
 
-fn ok(args: &[&str], dir: &Path) -> String {
+pub fn ok(args: &[&str], dir: &Path) -> String {
     let out = myriad(args, dir);
     let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
     assert!(out.status.success(), "{args:?}: {text}");
@@ -30,7 +30,7 @@ fn fails(args: &[&str], dir: &Path, needles: &[&str]) {
 }
 
 /// Every channel of two EXR files, bit for bit.
-fn same_pixels(a: &Path, b: &Path) {
+pub fn same_pixels(a: &Path, b: &Path) {
     let (la, _) = exr::read(a).unwrap();
     let (lb, _) = exr::read(b).unwrap();
     assert_eq!(la.channels.len(), lb.channels.len());
