@@ -122,9 +122,9 @@ struct SlurmArgs {
     /// Samples per pixel of the whole render.
     #[arg(long)]
     spp: u32,
-    /// Array tasks: the samples are cut into this many ranges.
-    #[arg(long)]
-    tasks: u32,
+    /// Array tasks: the samples are cut into this many ranges (not for --compare).
+    #[arg(long, required_unless_present = "compare")]
+    tasks: Option<u32>,
     /// Job folder (default: slurm-<scene name>).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -161,10 +161,28 @@ struct SlurmArgs {
     /// Extra EXR channels, comma-separated: albedo, normal, depth, variance.
     #[arg(long, value_delimiter = ',', value_parser = ["albedo", "normal", "depth", "variance"])]
     aov: Vec<String>,
+    /// Compare these samplers (comma-separated) instead of rendering one image: one task per
+    /// sampler and seed at --spp, one for the reference, and a report job (`myriad compare
+    /// --runs`) whose metrics equal a one-machine `compare` at equal spp. --tasks is ignored.
+    #[arg(long, value_parser = sampler_parser(), value_delimiter = ',', conflicts_with = "aov")]
+    compare: Option<Vec<LightSamplerKind>>,
+    /// Seeds per sampler of a comparison (the runs use the seeds after --seed).
+    #[arg(long, default_value_t = 1, requires = "compare")]
+    seeds: u32,
+    /// Reference EXR of a comparison (default: a task renders one).
+    #[arg(long, requires = "compare")]
+    reference: Option<PathBuf>,
+    /// spp of a comparison's rendered reference.
+    #[arg(long, default_value_t = 1024, requires = "compare")]
+    reference_spp: u32,
+    /// Sampler of a comparison's rendered reference.
+    #[arg(long, value_parser = sampler_parser(), default_value = "tree", requires = "compare")]
+    reference_sampler: LightSamplerKind,
 }
 
 impl SlurmArgs {
-    /// The `render` flags every task passes on.
+    /// The `render` flags every task passes on (a comparison's tasks set sampler and seed
+    /// themselves).
     fn render_args(&self) -> Vec<String> {
         let mut a = Vec::new();
         let mut flag = |name: &str, value: Option<String>| {
@@ -172,8 +190,9 @@ impl SlurmArgs {
                 a.extend([format!("--{name}"), v]);
             }
         };
-        flag("sampler", self.sampler.map(|s| s.name().to_string()));
-        flag("seed", self.seed.map(|s| s.to_string()));
+        let single = self.compare.is_none();
+        flag("sampler", self.sampler.filter(|_| single).map(|s| s.name().to_string()));
+        flag("seed", self.seed.filter(|_| single).map(|s| s.to_string()));
         flag("max-depth", self.max_depth.map(|d| d.to_string()));
         flag("resolution", self.resolution.map(|r| format!("{}x{}", r.x, r.y)));
         flag("camera", self.camera.clone());
@@ -224,6 +243,11 @@ struct CompareArgs {
     /// Output folder (default: compare-<scene name>).
     #[arg(long)]
     out_dir: Option<PathBuf>,
+    /// Measure runs rendered elsewhere instead of rendering them: DIR/SAMPLER-SEED.part, each
+    /// from `render --samples 0..SPP --sampler SAMPLER --seed SEED` (what `myriad slurm
+    /// --compare` writes). Equal spp only; the report's timings are the runs' own.
+    #[arg(long, value_name = "DIR", conflicts_with = "time")]
+    runs: Option<PathBuf>,
     #[command(flatten)]
     common: CommonArgs,
 }
@@ -364,11 +388,20 @@ fn run(cli: Cli) -> myriad::Result<ExitCode> {
             let out = a.out.clone().unwrap_or_else(|| {
                 PathBuf::from(format!("slurm-{}", a.scene.file_stem().map_or("scene".into(), |s| s.to_string_lossy())))
             });
+            let compare = a.compare.clone().map(|samplers| commands::slurm::CompareJob {
+                samplers,
+                seeds: a.seeds.max(1),
+                seed: a.seed.unwrap_or(0),
+                reference: a.reference.clone(),
+                reference_spp: a.reference_spp.max(1),
+                reference_sampler: a.reference_sampler,
+            });
             say(commands::slurm::slurm(&commands::slurm::SlurmOptions {
+                compare,
                 render_args: a.render_args(),
                 scene: a.scene,
                 spp: a.spp,
-                tasks: a.tasks,
+                tasks: a.tasks.unwrap_or(1),
                 out,
                 partition: a.partition,
                 time: a.time,
@@ -432,6 +465,7 @@ fn compare(a: CompareArgs) -> myriad::Result<()> {
         exposure: a.common.exposure,
         progress: !a.common.quiet,
         load: a.common.load.options(),
+        runs: a.runs,
     };
     let report = myriad::commands::compare::compare(&opts)?;
     say(report.table());

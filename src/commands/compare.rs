@@ -65,6 +65,15 @@ pub struct CompareOptions {
     pub exposure: f32,
     /// Show progress bars.
     pub progress: bool,
+    /// Measure runs rendered elsewhere instead of rendering them: `DIR/SAMPLER-SEED.part`,
+    /// each from `render --samples 0..SPP --sampler SAMPLER --seed SEED` (what `myriad slurm
+    /// --compare` has its job array write). Equal spp only.
+    pub runs: Option<PathBuf>,
+}
+
+/// The part file of one (sampler, seed) run in a runs folder.
+pub fn run_part(dir: &Path, kind: LightSamplerKind, seed: u64) -> PathBuf {
+    dir.join(format!("{}-{seed}.part", kind.name()))
 }
 
 /// The reference image and its per-pixel variance (zero when unknown).
@@ -234,7 +243,6 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
     };
     // The scene must load before the output folder is made: a broken scene leaves nothing.
     let loaded = load_scene(Some(&opts.scene), &scene_options)?;
-    let scene = &loaded.scene;
     let plan = Plan::new(opts, &loaded.report)?;
     // Ctrl-C stops the comparison (after the pass under way) and writes no report.
     let _busy = crate::interrupt::busy();
@@ -247,9 +255,17 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
         render: preview_picture(size, &reference.pixels, opts.exposure),
         error: None,
     }];
+    let scene_hash = match &opts.runs {
+        Some(_) if plan.budget.fixed().is_none() => {
+            return Err(Error::Usage("--runs measures runs of a fixed spp; give --spp, not --time".into()));
+        }
+        Some(_) => super::merge::scene_fingerprint(&loaded, &scene_options)?,
+        None => String::new(),
+    };
+    let runs_from = opts.runs.as_deref().map(|d| (d, scene_hash.as_str()));
     let mut results = Vec::new();
     for &kind in &plan.samplers {
-        let runs = run_sampler(opts, &plan, scene, kind, &reference)?;
+        let runs = run_sampler(opts, &plan, &loaded, runs_from, kind, &reference)?;
         let (result, column) = record_sampler(opts, &plan, runs, &reference)?;
         results.push(result);
         columns.push(column);
@@ -304,14 +320,70 @@ impl RenderObserver for Convergence<'_> {
     }
 }
 
-/// Renders `kind` with every seed of the plan and measures each run against the reference.
-fn run_sampler(
+/// One run's film, seconds and relMSE-over-time points.
+struct Run {
+    film: Film,
+    seconds: f64,
+    convergence: Vec<(f64, f64)>,
+}
+
+/// Renders one run of `strategy` with `seed`.
+fn render_run(
     opts: &CompareOptions,
     plan: &Plan,
     scene: &Scene,
+    strategy: &LightStrategy,
+    kind: LightSamplerKind,
+    seed: u64,
+    reference: &Reference,
+) -> Result<(Run, usize)> {
+    let mut watch = Convergence {
+        progress: Progress::new(opts.progress, kind.name()),
+        reference: &reference.pixels,
+        points: vec![],
+    };
+    let r = render(scene, strategy, &plan.settings(seed), &mut watch);
+    if r.stats.stopped != Stop::No {
+        return Err(Error::Interrupted);
+    }
+    let memory = r.stats.learned.map_or(0, |l| l.memory_bytes);
+    Ok((Run { film: r.film, seconds: r.stats.elapsed.as_secs_f64(), convergence: watch.points }, memory))
+}
+
+/// Reads one run rendered elsewhere (see [`CompareOptions::runs`]), checking that it is the
+/// run this plan would render.
+fn load_run(dir: &Path, plan: &Plan, scene_hash: &str, kind: LightSamplerKind, seed: u64) -> Result<Run> {
+    let path = run_part(dir, kind, seed);
+    let (h, film) = crate::io::part::read(&path)?;
+    let spp = plan.budget.fixed().map_or(0, |f| f.1);
+    let wanted = [
+        ("sampler", h.sampler.clone(), kind.name().to_string()),
+        ("seed", h.seed.to_string(), seed.to_string()),
+        ("samples", format!("{}..{}", h.samples[0], h.samples[1]), format!("0..{spp}")),
+        ("max depth", h.max_depth.to_string(), plan.max_depth.to_string()),
+        ("resolution", format!("{:?}", h.resolution), format!("{:?}", plan.resolution.to_array())),
+        ("scene contents", h.scene_hash.clone(), scene_hash.to_string()),
+    ];
+    if let Some((what, have, want)) = wanted.into_iter().find(|(_, have, want)| have != want) {
+        return Err(Error::Input {
+            path,
+            message: format!("is not this comparison's run: its {what} is {have}, the comparison's {want}"),
+        });
+    }
+    Ok(Run { film, seconds: h.render_seconds, convergence: Vec::new() })
+}
+
+/// Renders (or, with `runs`, reads) `kind` with every seed of the plan and measures each run
+/// against the reference.
+fn run_sampler(
+    opts: &CompareOptions,
+    plan: &Plan,
+    loaded: &LoadedScene,
+    runs_from: Option<(&Path, &str)>,
     kind: LightSamplerKind,
     reference: &Reference,
 ) -> Result<SamplerRuns> {
+    let scene = &loaded.scene;
     let t = Instant::now();
     let strategy = LightStrategy::build(kind, &scene.lights, scene.radius);
     let build_seconds = t.elapsed().as_secs_f64();
@@ -320,29 +392,27 @@ fn run_sampler(
     // A learning sampler holds more once it has learned: report the largest it held.
     let mut memory_bytes = strategy.memory_bytes();
     for &seed in &plan.seeds {
-        let mut watch = Convergence {
-            progress: Progress::new(opts.progress, kind.name()),
-            reference: &reference.pixels,
-            points: vec![],
+        let run = match runs_from {
+            Some((dir, hash)) => load_run(dir, plan, hash, kind, seed)?,
+            None => {
+                let (run, memory) = render_run(opts, plan, scene, &strategy, kind, seed, reference)?;
+                memory_bytes = memory_bytes.max(memory);
+                run
+            }
         };
-        let r = render(scene, &strategy, &plan.settings(seed), &mut watch);
-        if r.stats.stopped != Stop::No {
-            return Err(Error::Interrupted);
-        }
-        let m = error_metrics(&r.film.means(), &reference.pixels)?;
-        let seconds = r.stats.elapsed.as_secs_f64();
-        memory_bytes = memory_bytes.max(r.stats.learned.map_or(0, |l| l.memory_bytes));
-        seeds.add(&r.film);
+        let m = error_metrics(&run.film.means(), &reference.pixels)?;
+        seeds.add(&run.film);
         runs.push(RunResult {
             seed,
-            seconds,
-            spp: r.stats.spp,
+            seconds: run.seconds,
+            spp: run.film.spp(),
             mse: m.mse,
             rel_mse: m.rel_mse,
-            efficiency: efficiency(m.rel_mse, seconds),
-            convergence: watch.points,
+            efficiency: efficiency(m.rel_mse, run.seconds),
+            // A run rendered elsewhere shows only where it ended.
+            convergence: if run.convergence.is_empty() { vec![(run.seconds, m.rel_mse)] } else { run.convergence },
         });
-        first.get_or_insert(r.film);
+        first.get_or_insert(run.film);
     }
     let (mean, mean_variance) = seeds.finish();
     let first = first.expect("a plan has at least one seed");

@@ -1,10 +1,11 @@
 //! `myriad slurm`: a render as a Slurm job array, one sample range per task, and a merge job
-//! that waits for them (`--dependency=afterok`).
+//! that waits for them (`--dependency=afterok`); or a sampler comparison, one (sampler, seed)
+//! run per task (and one for the reference), and a report job.
 //!
-//! Writes `render.sbatch` (task i renders its range of the samples, picked by
-//! `SLURM_ARRAY_TASK_ID`, to `parts/part-i.part`) and `merge.sbatch` (`myriad merge` of every
-//! part into the image) into the job folder; with `submit`, hands both to `sbatch` and
-//! reports the job ids. Every path in the scripts is absolute: the cluster is assumed to share
+//! Writes `render.sbatch` (task i, picked by `SLURM_ARRAY_TASK_ID`, renders its range of the
+//! samples to `parts/part-i.part`, or its run to `runs/SAMPLER-SEED.part`) and `merge.sbatch`
+//! (`myriad merge` of every part into the image, or `myriad compare --runs` over the runs)
+//! into the job folder; with `submit`, hands both to `sbatch` and reports the job ids. Every path in the scripts is absolute: the cluster is assumed to share
 //! one file system (the scene, the myriad binary and the job folder visible alike on every
 //! node), as render clusters do.
 
@@ -13,6 +14,24 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use crate::error::{Error, Result};
+use crate::settings::LightSamplerKind;
+
+/// A sampler comparison on the cluster: what `myriad compare` would render at equal spp.
+#[derive(Clone, Debug)]
+pub struct CompareJob {
+    /// Samplers, in report order.
+    pub samplers: Vec<LightSamplerKind>,
+    /// Seeds per sampler: the runs use the seeds after `seed`.
+    pub seeds: u32,
+    /// The base seed.
+    pub seed: u64,
+    /// A reference to measure against; otherwise a task renders one.
+    pub reference: Option<PathBuf>,
+    /// spp and sampler of a rendered reference.
+    pub reference_spp: u32,
+    /// Sampler of a rendered reference.
+    pub reference_sampler: LightSamplerKind,
+}
 
 /// What to put on the cluster.
 #[derive(Clone, Debug, Default)]
@@ -37,6 +56,8 @@ pub struct SlurmOptions {
     pub mem: Option<String>,
     /// Submit with `sbatch` after writing the scripts.
     pub submit: bool,
+    /// Compare samplers instead of rendering one image.
+    pub compare: Option<CompareJob>,
 }
 
 /// What `slurm` wrote and submitted.
@@ -44,12 +65,12 @@ pub struct SlurmOptions {
 pub struct SlurmReport {
     /// The job folder.
     pub out: PathBuf,
-    /// Sample range of each task.
-    pub ranges: Vec<(u32, u32)>,
+    /// What each task does, in words.
+    pub tasks: Vec<String>,
     /// The render array's job id and the merge job's, when submitted.
     pub jobs: Option<(String, String)>,
-    /// The image the merge job writes.
-    pub image: PathBuf,
+    /// What the last job writes: the merged image, or the comparison's report folder.
+    pub result: PathBuf,
 }
 
 /// Samples `0..spp` cut into `tasks` ranges whose sizes differ by at most one.
@@ -81,62 +102,163 @@ fn directives(opts: &SlurmOptions, name: &str, log: &str) -> String {
     s
 }
 
+/// One array task: what it does, in words, and its command line.
+struct Task {
+    what: String,
+    command: Vec<String>,
+}
+
 /// Writes the two job scripts (and submits them when asked).
 pub fn slurm(opts: &SlurmOptions) -> Result<SlurmReport> {
-    if opts.tasks == 0 || opts.tasks > opts.spp {
-        return Err(Error::Usage(format!(
-            "--tasks {} does not fit {} spp: give 1 to {} tasks (each renders at least one sample)",
-            opts.tasks, opts.spp, opts.spp
-        )));
-    }
     let exe = std::env::current_exe().map_err(|e| Error::io("myriad executable", e))?;
     let (scene, out) = (absolute(&opts.scene)?, absolute(&opts.out)?);
     if !scene.is_file() {
         return Err(Error::Usage(format!("{}: no such scene file", scene.display())));
     }
-    for dir in [out.clone(), out.join("parts"), out.join("logs")] {
+    let stem = scene.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+    let text = |p: &Path| p.to_string_lossy().into_owned();
+    let mut common: Vec<String> = vec!["--quiet".into()];
+    common.extend(opts.render_args.iter().cloned());
+    if let Some(c) = opts.cpus_per_task {
+        common.extend(["--threads".into(), c.to_string()]);
+    }
+    let render = |extra: Vec<String>| {
+        let mut c = vec![text(&exe), "render".into(), text(&scene)];
+        c.extend(extra);
+        c.extend(common.iter().cloned());
+        c
+    };
+    let (tasks, last, result) = match &opts.compare {
+        None => {
+            if opts.tasks == 0 || opts.tasks > opts.spp {
+                return Err(Error::Usage(format!(
+                    "--tasks {} does not fit {} spp: give 1 to {} tasks (each renders at least one sample)",
+                    opts.tasks, opts.spp, opts.spp
+                )));
+            }
+            let parts: Vec<PathBuf> =
+                (0..opts.tasks).map(|i| out.join("parts").join(format!("part-{i}.part"))).collect();
+            let tasks = ranges(opts.spp, opts.tasks)
+                .into_iter()
+                .zip(&parts)
+                .map(|((a, b), part)| Task {
+                    what: format!("samples {a}..{b}"),
+                    command: render(vec!["--samples".into(), format!("{a}..{b}"), "-o".into(), text(part)]),
+                })
+                .collect();
+            let image = out.join(format!("{stem}.exr"));
+            let mut merge = vec![text(&exe), "merge".into()];
+            merge.extend(parts.iter().map(|p| text(p)));
+            merge.extend(["-o".into(), text(&image), "--png".into()]);
+            (tasks, merge, image)
+        }
+        Some(job) => compare_tasks(opts, job, &out, &render, &exe, &scene),
+    };
+    for dir in [out.clone(), out.join("parts"), out.join("runs"), out.join("logs")] {
         crate::io::ensure_dir(&dir)?;
     }
-    let stem = scene.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
-    let image = out.join(format!("{stem}.exr"));
-    let ranges = ranges(opts.spp, opts.tasks);
-    let q = |p: &Path| quoted(&p.to_string_lossy());
-    let list: Vec<String> = ranges.iter().map(|(a, b)| format!("{a}..{b}")).collect();
-    let mut args: Vec<String> = opts.render_args.iter().map(|a| quoted(a)).collect();
-    if let Some(c) = opts.cpus_per_task {
-        args.push(format!("--threads {c}"));
-    }
-    let render = format!(
-        "#!/bin/bash\n# Written by myriad slurm: task i renders samples RANGES[i] of {scene} ({spp} spp in {n} \
-         tasks).\n# Re-run one failed task alone with: sbatch --array=I {script}\n{dirs}#SBATCH --array=0-{last}\n\
-         set -euo pipefail\nRANGES=({list})\ni=${{SLURM_ARRAY_TASK_ID:?run me with sbatch, or set SLURM_ARRAY_TASK_ID}}\n\
-         exec {exe} render {sq} --samples \"${{RANGES[$i]}}\" -o {parts}/part-$i.part --quiet {args}\n",
+    let cases: String = tasks
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            format!("    {i}) exec {} ;;\n", t.command.iter().map(|w| quoted(w)).collect::<Vec<_>>().join(" "))
+        })
+        .collect();
+    let array = format!(
+        "#!/bin/bash\n# Written by myriad slurm: {n} tasks over {scene}, task i doing the i-th line below.\n\
+         # Re-run one failed task alone with: sbatch --array=I {script}\n{dirs}#SBATCH --array=0-{top}\n\
+         set -euo pipefail\ncase \"${{SLURM_ARRAY_TASK_ID:?run me with sbatch}}\" in\n{cases}    *) echo \"no task $SLURM_ARRAY_TASK_ID\" >&2; exit 2 ;;\nesac\n",
+        n = tasks.len(),
         scene = scene.display(),
-        spp = opts.spp,
-        n = opts.tasks,
         script = out.join("render.sbatch").display(),
         dirs = directives(opts, &format!("myriad-{stem}"), &format!("{}/logs/render-%a.out", out.display())),
-        last = opts.tasks - 1,
-        list = list.join(" "),
-        exe = q(&exe),
-        sq = q(&scene),
-        parts = q(&out.join("parts")),
-        args = args.join(" "),
+        top = tasks.len() - 1,
     );
-    let parts: Vec<String> = (0..opts.tasks).map(|i| q(&out.join("parts").join(format!("part-{i}.part")))).collect();
-    let merge = format!(
-        "#!/bin/bash\n# Written by myriad slurm: joins the render array's parts into {image}.\n{dirs}set -euo pipefail\n\
-         exec {exe} merge {parts} -o {iq} --png\n",
-        image = image.display(),
+    let finish = format!(
+        "#!/bin/bash\n# Written by myriad slurm: runs when every task of render.sbatch has succeeded.\n{dirs}\
+         set -euo pipefail\nexec {cmd}\n",
         dirs = directives(opts, &format!("myriad-{stem}-merge"), &format!("{}/logs/merge.out", out.display())),
-        exe = q(&exe),
-        parts = parts.join(" "),
-        iq = q(&image),
+        cmd = last.iter().map(|w| quoted(w)).collect::<Vec<_>>().join(" "),
     );
-    crate::io::write_text(&out.join("render.sbatch"), &render)?;
-    crate::io::write_text(&out.join("merge.sbatch"), &merge)?;
+    crate::io::write_text(&out.join("render.sbatch"), &array)?;
+    crate::io::write_text(&out.join("merge.sbatch"), &finish)?;
     let jobs = if opts.submit { Some(submit(&out)?) } else { None };
-    Ok(SlurmReport { out, ranges, jobs, image })
+    Ok(SlurmReport { out, tasks: tasks.into_iter().map(|t| t.what).collect(), jobs, result })
+}
+
+/// The tasks of a comparison (each sampler with each seed, then the reference unless given)
+/// and the report job's command line.
+fn compare_tasks(
+    opts: &SlurmOptions,
+    job: &CompareJob,
+    out: &Path,
+    render: &dyn Fn(Vec<String>) -> Vec<String>,
+    exe: &Path,
+    scene: &Path,
+) -> (Vec<Task>, Vec<String>, PathBuf) {
+    let text = |p: &Path| p.to_string_lossy().into_owned();
+    let runs = out.join("runs");
+    let mut tasks = Vec::new();
+    for &kind in &job.samplers {
+        for k in 1..=job.seeds as u64 {
+            let seed = job.seed.wrapping_add(k);
+            let part = super::compare::run_part(&runs, kind, seed);
+            tasks.push(Task {
+                what: format!("{kind} seed {seed}"),
+                command: render(vec![
+                    "--samples".into(),
+                    format!("0..{}", opts.spp),
+                    "--sampler".into(),
+                    kind.name().into(),
+                    "--seed".into(),
+                    seed.to_string(),
+                    "-o".into(),
+                    text(&part),
+                ]),
+            });
+        }
+    }
+    let reference = job.reference.clone().unwrap_or_else(|| out.join("reference.exr"));
+    if job.reference.is_none() {
+        tasks.push(Task {
+            what: format!("reference ({}, {} spp)", job.reference_sampler, job.reference_spp),
+            command: render(vec![
+                "--spp".into(),
+                job.reference_spp.to_string(),
+                "--sampler".into(),
+                job.reference_sampler.name().into(),
+                "--seed".into(),
+                super::compare::REFERENCE_SEED.to_string(),
+                "--aov".into(),
+                "variance".into(),
+                "--no-png".into(),
+                "-o".into(),
+                text(&reference),
+            ]),
+        });
+    }
+    let report = out.join("report");
+    let samplers: Vec<&str> = job.samplers.iter().map(|k| k.name()).collect();
+    let mut cmd = vec![text(exe), "compare".into(), text(scene)];
+    cmd.extend([
+        "--samplers".into(),
+        samplers.join(","),
+        "--seeds".into(),
+        job.seeds.to_string(),
+        "--seed".into(),
+        job.seed.to_string(),
+        "--spp".into(),
+        opts.spp.to_string(),
+        "--runs".into(),
+        text(&runs),
+        "--reference".into(),
+        text(&reference),
+        "--out-dir".into(),
+        text(&report),
+        "--quiet".into(),
+    ]);
+    cmd.extend(opts.render_args.iter().filter(|a| !a.starts_with("--sampler")).cloned());
+    (tasks, cmd, report)
 }
 
 /// `sbatch --parsable` of the array, then of the merge after it; the two job ids.
@@ -167,12 +289,13 @@ fn submit(out: &Path) -> Result<(String, String)> {
 impl fmt::Display for SlurmReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let d = self.out.display();
-        let spans: Vec<String> = self.ranges.iter().map(|(a, b)| format!("{a}..{b}")).collect();
-        writeln!(f, "tasks      {} (samples {})", self.ranges.len(), spans.join(", "))?;
+        let shown: Vec<&str> = self.tasks.iter().take(6).map(String::as_str).collect();
+        let more = if self.tasks.len() > 6 { format!(", … ({} more)", self.tasks.len() - 6) } else { String::new() };
+        writeln!(f, "tasks      {}: {}{more}", self.tasks.len(), shown.join(", "))?;
         writeln!(f, "scripts    {d}/render.sbatch (job array), {d}/merge.sbatch (after it)")?;
         match &self.jobs {
             Some((render, merge)) => {
-                writeln!(f, "submitted  render array {render}, merge {merge} (runs when every task succeeded)")?;
+                writeln!(f, "submitted  array {render}, then {merge} (runs when every task succeeded)")?;
                 writeln!(
                     f,
                     "follow     squeue -j {render},{merge}   (sacct -j {render}, where accounting is on); logs in {d}/logs"
@@ -187,7 +310,7 @@ impl fmt::Display for SlurmReport {
                 "submit     sbatch {d}/render.sbatch, then sbatch --dependency=afterok:ID {d}/merge.sbatch"
             )?,
         }
-        write!(f, "image      {} (and its .png)", self.image.display())
+        write!(f, "result     {}", self.result.display())
     }
 }
 

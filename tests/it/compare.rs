@@ -36,6 +36,7 @@ fn options(out_dir: &Path, samplers: Vec<LightSamplerKind>, budget: Budget) -> C
         load: Default::default(),
         exposure: 0.0,
         progress: false,
+        runs: None,
     }
 }
 
