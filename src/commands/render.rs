@@ -144,7 +144,12 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
 
     let scene_name = opts.scene.as_deref().map_or(DEFAULT_SCENE_NAME.to_string(), |p| p.display().to_string());
     let mut written = Vec::new();
-    if let Some((range, path)) = part {
+    if let Some(((first, _), path)) = part {
+        // Stopped after a pass, the part holds the samples rendered: a range of its own.
+        let range = (first, first + output.film.spp());
+        if range.0 == range.1 {
+            return Err(Error::Interrupted);
+        }
         let hash = super::merge::scene_fingerprint(&loaded, &scene_options)?;
         let header = super::merge::part_header(&scene_name, hash, sampler, &settings, range, &output.stats);
         crate::io::part::write(&path, &header, &output.film)?;
