@@ -229,12 +229,17 @@ struct CompareArgs {
     #[arg(long, value_parser = sampler_parser(), value_delimiter = ',')]
     samplers: Option<Vec<LightSamplerKind>>,
     /// Reference EXR to measure against (default: render one and cache it in the output folder).
-    #[arg(long, conflicts_with_all = ["reference_spp", "reference_sampler"])]
+    #[arg(long, conflicts_with_all = ["reference_spp", "reference_time", "reference_sampler"])]
     reference: Option<PathBuf>,
-    /// spp of the rendered reference.
-    #[arg(long, default_value_t = 1024)]
-    reference_spp: u32,
-    /// Sampler of the rendered reference (default: all up to 64 lights, local up to 10^4, tree beyond).
+    /// spp of the rendered reference [default: 16 × each run's spp, or 16 × its time with
+    /// --time, at most 10 minutes; a timing pass estimates it first].
+    #[arg(long, conflicts_with = "reference_time")]
+    reference_spp: Option<u32>,
+    /// Seconds (whole passes) of the rendered reference, instead of an spp.
+    #[arg(long, value_parser = parse_seconds)]
+    reference_time: Option<Duration>,
+    /// Sampler of the rendered reference [default: tree, the unbiased sampler that converges
+    /// fastest; all and local cost O(n) per point].
     #[arg(long, value_parser = sampler_parser())]
     reference_sampler: Option<LightSamplerKind>,
     /// Seeds per sampler: metrics become mean ± standard deviation, and the bias check gains power.
@@ -456,7 +461,8 @@ fn compare(a: CompareArgs) -> myriad::Result<()> {
         samplers: a.samplers,
         settings: a.common.request(None),
         reference: a.reference,
-        reference_spp: a.reference_spp.max(1),
+        reference_spp: a.reference_spp,
+        reference_time: a.reference_time,
         reference_sampler: a.reference_sampler,
         seeds: a.seeds.max(1),
         out_dir: out_dir.clone(),
@@ -469,6 +475,9 @@ fn compare(a: CompareArgs) -> myriad::Result<()> {
     };
     let report = myriad::commands::compare::compare(&opts)?;
     say(report.table());
+    if let Some(w) = report.reference.warning() {
+        say(format!("warning: {w}"));
+    }
     for s in report.samplers.iter().filter(|s| s.bias.flagged) {
         say(format!(
             "warning: {} disagrees with the reference (z = {:.1}): biased sampler or unconverged reference",

@@ -7,14 +7,15 @@
 //! reference is rendered with a seed no compared run uses (or given), and cached in the
 //! output folder under a key of everything that determines it.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use super::progress::Progress;
 use super::settings::{COMPARE_DEFAULT_SPP, RenderRequest, Resolved};
 use super::{LoadedScene, SceneOptions, load_scene};
 use crate::compare::images::{SheetColumn, contact_sheet, error_picture, preview_picture};
-use crate::compare::metrics::{BIAS_ALPHA, bias_check, efficiency, error_metrics, relative_error_map};
+use crate::compare::metrics::{BIAS_ALPHA, REL_MSE_EPSILON, bias_check, efficiency, error_metrics, relative_error_map};
 use crate::compare::plot::{Curve, convergence_svg};
 use crate::compare::report::{CompareReport, ReferenceInfo, RunResult, SamplerResult, Stat, num};
 use crate::error::{Error, Result};
@@ -46,10 +47,11 @@ pub struct CompareOptions {
     pub settings: RenderRequest,
     /// A reference EXR to measure against; otherwise one is rendered (and cached).
     pub reference: Option<PathBuf>,
-    /// spp of a rendered reference.
-    pub reference_spp: u32,
-    /// Sampler of a rendered reference; default: `all` up to 64 lights, `local` up to 10⁴,
-    /// `tree` beyond (local's O(n) per point makes it impractical there).
+    /// spp of a rendered reference (default: see [`reference_budget`]).
+    pub reference_spp: Option<u32>,
+    /// Time of a rendered reference, instead of an spp.
+    pub reference_time: Option<Duration>,
+    /// Sampler of a rendered reference; default [`REFERENCE_SAMPLER`].
     pub reference_sampler: Option<LightSamplerKind>,
     /// Seeds per sampler (mean ± standard deviation over them).
     pub seeds: u32,
@@ -108,11 +110,57 @@ fn read_reference(path: &Path, size: UVec2) -> Result<ReferenceFile> {
     Ok(ReferenceFile { pixels, variance, meta })
 }
 
-fn default_reference_sampler(lights: usize) -> LightSamplerKind {
-    match lights {
-        0..=64 => LightSamplerKind::All,
-        65..=10_000 => LightSamplerKind::Local,
-        _ => LightSamplerKind::Tree,
+/// The reference's sampler unless one is named: every sampler is unbiased, so the one that
+/// converges fastest makes the best reference for the time. The tree is within 7–9 % of
+/// `local`'s error per sample at a fraction of its O(n) cost (docs/scaling), and `all` costs n
+/// shadow rays a vertex: both are for small scenes only.
+pub const REFERENCE_SAMPLER: LightSamplerKind = LightSamplerKind::Tree;
+
+/// A rendered reference takes this many times what each compared run takes (spp or time)...
+pub const REFERENCE_FACTOR: u32 = 16;
+
+/// ... but at most this long (then it renders for this long instead).
+pub const MAX_REFERENCE_TIME: Duration = Duration::from_secs(600);
+
+/// A reference whose own noise (its variance of the mean, as relMSE) exceeds this share of the
+/// best compared run's relMSE is flagged: it would move the numbers it judges.
+pub const NOISY_REFERENCE: f64 = 0.1;
+
+/// The rendered reference's budget: `--reference-spp` or `--reference-time` if given, else
+/// [`REFERENCE_FACTOR`] × each run's, capped at [`MAX_REFERENCE_TIME`] by the estimate
+/// `per_spp` from a timing pass.
+fn reference_budget(opts: &CompareOptions, runs: Budget, per_spp: Duration) -> Budget {
+    if let Some(n) = opts.reference_spp {
+        return Budget::Spp(n.max(1));
+    }
+    if let Some(t) = opts.reference_time {
+        return Budget::Time(t);
+    }
+    match runs.fixed() {
+        Some((_, n)) => {
+            let spp = n.saturating_mul(REFERENCE_FACTOR);
+            if per_spp * spp > MAX_REFERENCE_TIME { Budget::Time(MAX_REFERENCE_TIME) } else { Budget::Spp(spp) }
+        }
+        None => match runs {
+            Budget::Time(t) => Budget::Time((t * REFERENCE_FACTOR).min(MAX_REFERENCE_TIME)),
+            _ => unreachable!("a budget is fixed or a time"),
+        },
+    }
+}
+
+/// Wall time of one sample per pixel of `kind` over the plan's image (a short timing pass
+/// for the estimates; its image is dropped).
+fn time_per_spp(scene: &Scene, kind: LightSamplerKind, plan: &Plan) -> Duration {
+    let strategy = LightStrategy::build(kind, &scene.lights, scene.radius);
+    let settings = RenderSettings { budget: Budget::Spp(1), ..plan.settings(REFERENCE_SEED) };
+    render(scene, &strategy, &settings, &mut ()).stats.elapsed
+}
+
+/// The budget in words.
+fn budget_words(b: Budget) -> String {
+    match b {
+        Budget::Time(t) => format!("{:.0} s", t.as_secs_f64()),
+        _ => format!("{} spp", b.fixed().map_or(0, |f| f.1)),
     }
 }
 
@@ -122,6 +170,7 @@ fn reference_key(
     opts: &CompareOptions,
     loaded: &LoadedScene,
     sampler: LightSamplerKind,
+    budget: Budget,
     max_depth: u32,
 ) -> Result<String> {
     let mut key = Fingerprint::new("myriad compare reference");
@@ -134,42 +183,41 @@ fn reference_key(
         .value("camera", opts.camera.as_deref().unwrap_or("-"))
         .value("resolution", format!("{}x{}", size.x, size.y))
         .value("sampler", sampler.name())
-        .value("spp", opts.reference_spp)
+        .value("budget", format!("{budget:?}"))
         .value("max_depth", max_depth)
         .value("seed", REFERENCE_SEED)
         .value("build", crate::fingerprint::build_id());
     Ok(key.finish())
 }
 
-/// Loads the given reference, reuses a cached one, or renders and caches a new one.
-fn reference(opts: &CompareOptions, loaded: &LoadedScene, max_depth: u32) -> Result<Reference> {
+/// Loads the given reference, reuses a cached one, or renders (with `sampler` and `budget`)
+/// and caches a new one.
+fn reference(
+    opts: &CompareOptions,
+    loaded: &LoadedScene,
+    sampler: LightSamplerKind,
+    budget: Budget,
+    max_depth: u32,
+) -> Result<Reference> {
     let (scene, size) = (&loaded.scene, loaded.report.resolution);
     if let Some(path) = &opts.reference {
         let ReferenceFile { pixels, variance, .. } = read_reference(path, size)?;
-        let info =
-            ReferenceInfo { path: path.display().to_string(), origin: "given".into(), reused: false, seconds: 0.0 };
+        let info = ReferenceInfo { path: path.display().to_string(), origin: "given".into(), ..Default::default() };
         return Ok(Reference { pixels, variance, info });
     }
-    let sampler = opts.reference_sampler.unwrap_or_else(|| default_reference_sampler(scene.lights.len()));
-    let origin = format!("{sampler}, {} spp, seed {REFERENCE_SEED:#x}", opts.reference_spp);
-    let key = reference_key(opts, loaded, sampler, max_depth)?;
+    let origin = format!("{sampler}, {}, seed {REFERENCE_SEED:#x}", budget_words(budget));
+    let key = reference_key(opts, loaded, sampler, budget, max_depth)?;
     let path = opts.out_dir.join("reference.exr");
     if path.exists()
         && let Ok(ReferenceFile { pixels, variance, meta }) = read_reference(&path, size)
         && meta.iter().any(|(k, v)| k == "myriad.reference_key" && *v == key)
     {
-        let info = ReferenceInfo { path: path.display().to_string(), origin, reused: true, seconds: 0.0 };
+        let info = ReferenceInfo { path: path.display().to_string(), origin, reused: true, ..Default::default() };
         return Ok(Reference { pixels, variance, info });
     }
     let strategy = LightStrategy::build(sampler, &scene.lights, scene.radius);
     let aovs = AovSet { variance: true, ..Default::default() };
-    let settings = RenderSettings {
-        budget: Budget::Spp(opts.reference_spp),
-        seed: REFERENCE_SEED,
-        max_depth,
-        resolution: size,
-        aovs,
-    };
+    let settings = RenderSettings { budget, seed: REFERENCE_SEED, max_depth, resolution: size, aovs };
     let out = render(scene, &strategy, &settings, &mut Progress::new(opts.progress, "ref"));
     // A reference stopped short is not the reference its key describes.
     if out.stats.stopped != Stop::No {
@@ -182,11 +230,83 @@ fn reference(opts: &CompareOptions, loaded: &LoadedScene, max_depth: u32) -> Res
     let variance = (0..pixels.len()).map(|i| out.film.variance_of_mean(i)).collect();
     let info = ReferenceInfo {
         path: path.display().to_string(),
-        origin,
-        reused: false,
+        origin: if budget.fixed().is_some() { origin } else { format!("{origin} ({} spp)", out.stats.spp) },
         seconds: out.stats.elapsed.as_secs_f64(),
+        spp: out.stats.spp,
+        ..Default::default()
     };
     Ok(Reference { pixels, variance, info })
+}
+
+/// Decides the reference's budget and, when progress is shown, says what the comparison will
+/// render and how long it should take (from one-spp timing passes where the budget is spp).
+fn announce(opts: &CompareOptions, plan: &Plan, scene: &Scene, ref_sampler: LightSamplerKind) -> Budget {
+    let fixed = plan.budget.fixed();
+    let render_ref = opts.reference.is_none();
+    let timing = |kind| if fixed.is_some() { time_per_spp(scene, kind, plan) } else { Duration::ZERO };
+    let ref_per_spp = if render_ref && opts.reference_spp.is_none() && opts.reference_time.is_none() {
+        timing(ref_sampler)
+    } else {
+        Duration::ZERO
+    };
+    let budget = reference_budget(opts, plan.budget, ref_per_spp);
+    if !opts.progress {
+        return budget;
+    }
+    let seeds = plan.seeds.len() as u32;
+    let runs: Duration = match (fixed, plan.budget) {
+        (_, _) if opts.runs.is_some() => Duration::ZERO,
+        (Some((_, n)), _) => plan.samplers.iter().map(|&k| timing(k) * n * seeds).sum(),
+        (None, Budget::Time(t)) => t * seeds * plan.samplers.len() as u32,
+        (None, _) => Duration::ZERO,
+    };
+    let ref_time = match budget {
+        _ if !render_ref => Duration::ZERO,
+        Budget::Time(t) => t,
+        b => ref_per_spp.max(timing(ref_sampler)) * b.fixed().map_or(0, |f| f.1),
+    };
+    let reference = if render_ref {
+        format!("reference {ref_sampler}, {} (≈ {:.0} s, unless cached)", budget_words(budget), ref_time.as_secs_f64())
+    } else {
+        "the given reference".to_string()
+    };
+    let names: Vec<&str> = plan.samplers.iter().map(|k| k.name()).collect();
+    let _ = writeln!(
+        std::io::stderr(),
+        "compare    {} × {} px: {reference}; then {} × {seeds} seed(s) at {} each (≈ {:.0} s); total ≈ {:.0} s",
+        plan.resolution.x,
+        plan.resolution.y,
+        names.join(", "),
+        budget_words(plan.budget),
+        runs.as_secs_f64(),
+        (runs + ref_time).as_secs_f64()
+    );
+    budget
+}
+
+/// An image's noise as relMSE would see it: the mean over pixels of its variance of the mean
+/// over (`image`² + ε), `image` a low-noise estimate of the truth.
+fn relative_noise(variance: &[Rgb], image: &[Rgb]) -> f64 {
+    variance
+        .iter()
+        .zip(image)
+        .map(|(v, p)| (0..3).map(|c| v[c] as f64 / ((p[c] as f64).powi(2) + REL_MSE_EPSILON)).sum::<f64>() / 3.0)
+        .sum::<f64>()
+        / image.len().max(1) as f64
+}
+
+/// Measures the reference's own noise against the least noisy run's (both over that run's
+/// image, so a noisy reference does not judge itself): flagged beyond [`NOISY_REFERENCE`].
+fn judge_reference(info: &mut ReferenceInfo, variance: &[Rgb], image: &[Rgb], run_noise: f64) {
+    if variance.iter().all(|v| *v == Rgb::ZERO) {
+        return;
+    }
+    let noise = relative_noise(variance, image);
+    info.noise_rel_mse = Some(noise);
+    info.too_noisy = noise > NOISY_REFERENCE * run_noise;
+    if info.too_noisy && info.spp > 0 {
+        info.needed_spp = Some((info.spp as f64 * noise / (NOISY_REFERENCE * run_noise)).ceil() as u64);
+    }
 }
 
 /// What the comparison renders, every choice made: the samplers in report order, the
@@ -247,7 +367,9 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
     // Ctrl-C stops the comparison (after the pass under way) and writes no report.
     let _busy = crate::interrupt::busy();
     crate::io::ensure_dir(&opts.out_dir)?;
-    let reference = reference(opts, &loaded, plan.max_depth)?;
+    let ref_sampler = opts.reference_sampler.unwrap_or(REFERENCE_SAMPLER);
+    let ref_budget = announce(opts, &plan, &loaded.scene, ref_sampler);
+    let mut reference = reference(opts, &loaded, ref_sampler, ref_budget, plan.max_depth)?;
     let size = plan.resolution;
     let mut columns = vec![SheetColumn {
         title: "reference".into(),
@@ -264,13 +386,24 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
     };
     let runs_from = opts.runs.as_deref().map(|d| (d, scene_hash.as_str()));
     let mut results = Vec::new();
+    // The least noisy run's own noise and image, to judge the reference's noise by.
+    let mut quietest: Option<(f64, Vec<Rgb>)> = None;
     for &kind in &plan.samplers {
         let runs = run_sampler(opts, &plan, &loaded, runs_from, kind, &reference)?;
+        let means = runs.first.means();
+        let variance: Vec<Rgb> = (0..means.len()).map(|i| runs.first.variance_of_mean(i)).collect();
+        let noise = relative_noise(&variance, &means);
+        if quietest.as_ref().is_none_or(|q| noise < q.0) {
+            quietest = Some((noise, means));
+        }
         let (result, column) = record_sampler(opts, &plan, runs, &reference)?;
         results.push(result);
         columns.push(column);
     }
     rank(&mut results);
+    if let Some((run_noise, image)) = &quietest {
+        judge_reference(&mut reference.info, &reference.variance, image, *run_noise);
+    }
     let report = CompareReport {
         scene: opts.scene.display().to_string(),
         mode: plan.mode(),

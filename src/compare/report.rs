@@ -71,8 +71,8 @@ pub struct SamplerResult {
     pub files: Vec<String>,
 }
 
-/// How the reference was obtained.
-#[derive(Clone, Debug, Serialize)]
+/// How the reference was obtained, and whether it is good enough to judge by.
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct ReferenceInfo {
     /// Its file.
     pub path: String,
@@ -82,6 +82,30 @@ pub struct ReferenceInfo {
     pub reused: bool,
     /// Seconds spent rendering it now (0 when given or reused).
     pub seconds: f64,
+    /// Samples per pixel it was rendered with now (0 when given or reused).
+    pub spp: u32,
+    /// Its own noise: the mean of its variance of the mean over (ref² + ε), the relMSE an
+    /// exact image would show against it (unknown without a variance layer).
+    pub noise_rel_mse: Option<f64>,
+    /// Its noise exceeds a tenth of the least noisy compared run's own: it moves what it
+    /// judges.
+    pub too_noisy: bool,
+    /// The spp it would need to fall below that, when its spp is known.
+    pub needed_spp: Option<u64>,
+}
+
+impl ReferenceInfo {
+    /// The warning a too-noisy reference deserves, if it is one.
+    pub fn warning(&self) -> Option<String> {
+        self.too_noisy.then(|| {
+            format!(
+                "the reference is too noisy to judge by: its own noise is relMSE {:.3e}, more than a tenth of the \
+                 least noisy run's{}",
+                self.noise_rel_mse.unwrap_or(0.0),
+                self.needed_spp.map_or(String::new(), |n| format!("; render it with --reference-spp {n} or more"))
+            )
+        })
+    }
 }
 
 /// The whole comparison.
@@ -169,6 +193,9 @@ impl CompareReport {
             if self.reference.reused { ", reused from an earlier run" } else { "" }
         );
         md += &self.table();
+        if let Some(w) = self.reference.warning() {
+            md += &format!("\n**Warning:** {w}.\n");
+        }
         md += &format!(
             "\nrelMSE = mean((x − ref)² / (ref² + {REL_MSE_EPSILON})); efficiency = 1 / (relMSE · render \
              seconds); `vs best` divides by the best mean efficiency. A bias |z| beyond the {}% level \

@@ -284,3 +284,14 @@ fn a_second_ctrl_c_or_a_sigterm_writes_nothing_and_leaves_no_temporary_file() {
         assert_eq!(names(dir.path()), ["out.exr"], "{signals:?}: files left");
     }
 }
+
+#[test]
+fn progress_off_a_terminal_is_plain_lines_with_the_time_left() {
+    let (dir, _) = scene_file(GOOD);
+    let out = myriad(&["render", "scene.ron", "-o", "out.exr", "--spp", "8"], dir.path());
+    let err = stderr(&out);
+    assert!(out.status.success(), "{err}");
+    assert!(err.lines().any(|l| l.contains("100% (") && l.contains("s left")), "no progress line:\n{err}");
+    let quiet = myriad(&["render", "scene.ron", "-o", "q.exr", "--spp", "8", "-q"], dir.path());
+    assert!(!stderr(&quiet).contains("% ("), "-q shows no progress");
+}

@@ -27,7 +27,8 @@ fn options(out_dir: &Path, samplers: Vec<LightSamplerKind>, budget: Budget) -> C
             ..Default::default()
         },
         reference: None,
-        reference_spp: 64,
+        reference_spp: Some(64),
+        reference_time: None,
         reference_sampler: None,
         seeds: 2,
         out_dir: out_dir.to_path_buf(),
@@ -176,7 +177,7 @@ fn the_cached_reference_is_keyed_on_every_input() {
     )
     .unwrap();
     let mut opts = options(&dir.path().join("out"), vec![LightSamplerKind::Power], Budget::Spp(1));
-    (opts.scene, opts.seeds, opts.reference_spp, opts.resolution) = (scene, 1, 2, Some(UVec2::new(16, 12)));
+    (opts.scene, opts.seeds, opts.reference_spp, opts.resolution) = (scene, 1, Some(2), Some(UVec2::new(16, 12)));
     let reused = |opts: &CompareOptions| compare(opts).unwrap().reference.reused;
     assert!(!reused(&opts), "first run renders");
     assert!(reused(&opts), "same inputs reuse");
@@ -187,7 +188,7 @@ fn the_cached_reference_is_keyed_on_every_input() {
     assert!(reused(&opts));
     opts.load.punctual_scale = 1.0;
     assert!(!reused(&opts), "another punctual scale renders again");
-    opts.reference_spp = 3;
+    opts.reference_spp = Some(3);
     assert!(!reused(&opts), "another reference spp renders again");
     opts.settings.max_depth = Some(2);
     assert!(!reused(&opts), "another depth renders again");
@@ -208,7 +209,7 @@ fn compare_takes_what_the_scene_file_asks_unless_the_command_line_says_otherwise
     )
     .unwrap();
     let mut opts = options(&dir.path().join("out"), vec![], Budget::Spp(1));
-    (opts.scene, opts.samplers, opts.settings, opts.reference_spp) = (scene, None, RenderRequest::default(), 2);
+    (opts.scene, opts.samplers, opts.settings, opts.reference_spp) = (scene, None, RenderRequest::default(), Some(2));
     let report = compare(&opts).unwrap();
     let names: Vec<&str> = report.samplers.iter().map(|s| s.sampler.as_str()).collect();
     assert_eq!(names, ["uniform", "power", "local", "tree", "all"]);
@@ -221,4 +222,27 @@ fn compare_takes_what_the_scene_file_asks_unless_the_command_line_says_otherwise
     opts.samplers = Some(vec![LightSamplerKind::Power]);
     let report = compare(&opts).unwrap();
     assert_eq!((report.max_depth, report.samplers[0].runs[0].seed, report.samplers[0].runs[0].spp), (1, 1, 1));
+}
+
+#[test]
+fn the_default_reference_is_the_tree_at_a_multiple_of_the_runs_and_a_noisy_one_is_flagged() {
+    // 81 lights: beyond what `all` or `local` should render a reference of.
+    let dir = tempfile::tempdir().unwrap();
+    let mut opts = options(dir.path(), vec![LightSamplerKind::Uniform], Budget::Spp(4));
+    (opts.reference_spp, opts.seeds) = (None, 1);
+    let report = compare(&opts).unwrap();
+    assert!(
+        report.reference.origin.starts_with("tree, 64 spp"),
+        "16 × 4 spp with the tree: {}",
+        report.reference.origin
+    );
+    // An 8-spp reference against 128-spp runs moves what it judges: flagged, with the spp it needs.
+    let dir = tempfile::tempdir().unwrap();
+    let mut opts = options(dir.path(), vec![LightSamplerKind::Tree], Budget::Spp(128));
+    (opts.reference_spp, opts.seeds) = (Some(8), 1);
+    let report = compare(&opts).unwrap();
+    let r = &report.reference;
+    assert!(r.too_noisy && r.needed_spp.is_some_and(|n| n > 80), "{r:?} {:?}", report.samplers[0].rel_mse);
+    let md = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
+    assert!(md.contains("too noisy to judge by") && md.contains("--reference-spp"), "{md}");
 }
