@@ -106,6 +106,11 @@ struct RenderArgs {
     /// Extra EXR channels, comma-separated: albedo, normal, depth, variance.
     #[arg(long, value_delimiter = ',', value_parser = ["albedo", "normal", "depth", "variance"])]
     aov: Vec<String>,
+    /// Stream the image to a running tev viewer after every pass (tev's TCP protocol; AOVs
+    /// as extra channels) [default address: 127.0.0.1:14158]. Nothing listening: a warning,
+    /// and the render goes on.
+    #[arg(long, value_name = "[HOST:]PORT", num_args = 0..=1, default_missing_value = commands::display::DEFAULT_DISPLAY)]
+    display: Option<String>,
     /// Render only samples A to B−1 of every pixel (exactly the samples a full render takes
     /// there) and write them as a part file for `myriad merge`: to -o when it ends in .part,
     /// else beside it as NAME.samples-A-B.part. No image and no preview are written.
@@ -248,6 +253,10 @@ struct CompareArgs {
     /// Output folder (default: compare-<scene name>).
     #[arg(long)]
     out_dir: Option<PathBuf>,
+    /// Stream each run to a running tev viewer as it renders, one image per sampler and seed
+    /// [default address: 127.0.0.1:14158].
+    #[arg(long, value_name = "[HOST:]PORT", num_args = 0..=1, default_missing_value = myriad::commands::display::DEFAULT_DISPLAY)]
+    display: Option<String>,
     /// Measure runs rendered elsewhere instead of rendering them: DIR/SAMPLER-SEED.part, each
     /// from `render --samples 0..SPP --sampler SAMPLER --seed SEED` (what `myriad slurm
     /// --compare` writes). Equal spp only; the report's timings are the runs' own.
@@ -445,6 +454,7 @@ fn render(a: RenderArgs) -> myriad::Result<ExitCode> {
         exposure: a.common.exposure,
         progress: !a.common.quiet,
         load: a.common.load.options(),
+        display: a.display,
     };
     let report = commands::render::render(&opts)?;
     let stopped = report.output.stats.stopped != myriad::interrupt::Stop::No;
@@ -472,6 +482,7 @@ fn compare(a: CompareArgs) -> myriad::Result<()> {
         progress: !a.common.quiet,
         load: a.common.load.options(),
         runs: a.runs,
+        display: a.display,
     };
     let report = myriad::commands::compare::compare(&opts)?;
     say(report.table());

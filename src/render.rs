@@ -88,6 +88,54 @@ impl<F: FnMut(&Film, Duration) + Sync> RenderObserver for OnPass<F> {
     }
 }
 
+/// Two watchers of one render (a progress display and a viewer, say).
+impl<A: RenderObserver, B: RenderObserver> RenderObserver for (A, B) {
+    fn start(&self, total: u64) {
+        self.0.start(total);
+        self.1.start(total);
+    }
+    fn advance(&self, n: u64) {
+        self.0.advance(n);
+        self.1.advance(n);
+    }
+    fn pass(&mut self, film: &Film, elapsed: Duration) {
+        self.0.pass(film, elapsed);
+        self.1.pass(film, elapsed);
+    }
+}
+
+/// A watcher lent for one render.
+impl<A: RenderObserver + ?Sized> RenderObserver for &mut A {
+    fn start(&self, total: u64) {
+        (**self).start(total);
+    }
+    fn advance(&self, n: u64) {
+        (**self).advance(n);
+    }
+    fn pass(&mut self, film: &Film, elapsed: Duration) {
+        (**self).pass(film, elapsed);
+    }
+}
+
+/// A watcher that may not be there.
+impl<A: RenderObserver> RenderObserver for Option<A> {
+    fn start(&self, total: u64) {
+        if let Some(a) = self {
+            a.start(total);
+        }
+    }
+    fn advance(&self, n: u64) {
+        if let Some(a) = self {
+            a.advance(n);
+        }
+    }
+    fn pass(&mut self, film: &Film, elapsed: Duration) {
+        if let Some(a) = self {
+            a.pass(film, elapsed);
+        }
+    }
+}
+
 /// Counts and timings of a render.
 #[derive(Clone, Copy, Debug)]
 pub struct RenderStats {

@@ -71,6 +71,8 @@ pub struct CompareOptions {
     /// each from `render --samples 0..SPP --sampler SAMPLER --seed SEED` (what `myriad slurm
     /// --compare` has its job array write). Equal spp only.
     pub runs: Option<PathBuf>,
+    /// Stream each run to the tev viewer at this address.
+    pub display: Option<String>,
 }
 
 /// The part file of one (sampler, seed) run in a runs folder.
@@ -475,7 +477,9 @@ fn render_run(
         reference: &reference.pixels,
         points: vec![],
     };
-    let r = render(scene, strategy, &plan.settings(seed), &mut watch);
+    let name = format!("{kind} seed {seed}");
+    let mut display = opts.display.as_deref().map(|a| super::display::TevStream::connect(a, &name, AovSet::default()));
+    let r = render(scene, strategy, &plan.settings(seed), &mut (&mut watch, &mut display));
     if r.stats.stopped != Stop::No {
         return Err(Error::Interrupted);
     }

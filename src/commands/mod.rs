@@ -7,6 +7,7 @@
 
 pub mod compare;
 pub mod diff;
+pub mod display;
 pub mod info;
 pub mod merge;
 pub mod progress;

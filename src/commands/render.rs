@@ -5,6 +5,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use super::display::TevStream;
 use super::progress::Progress;
 use super::settings::{DEFAULT_SPP, RenderRequest};
 use super::{DEFAULT_SCENE_NAME, LoadedScene, SceneOptions, human_duration, human_rate, load_scene};
@@ -43,6 +44,8 @@ pub struct RenderOptions {
     pub exposure: f32,
     /// Draw a progress bar (only shown on a terminal).
     pub progress: bool,
+    /// Stream every pass to the tev viewer at this address.
+    pub display: Option<String>,
 }
 
 /// What a render did, for the summary.
@@ -137,12 +140,15 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
             res.y
         );
     }
-    let output = render_scene(scene, &strategy, &settings, &mut Progress::new(opts.progress, sampler.name()));
+    let scene_name = opts.scene.as_deref().map_or(DEFAULT_SCENE_NAME.to_string(), |p| p.display().to_string());
+    let display =
+        opts.display.as_deref().map(|a| TevStream::connect(a, &format!("{scene_name} ({sampler})"), settings.aovs));
+    let mut watch = (Progress::new(opts.progress, sampler.name()), display);
+    let output = render_scene(scene, &strategy, &settings, &mut watch);
     if output.stats.stopped == Stop::Now {
         return Err(Error::Interrupted);
     }
 
-    let scene_name = opts.scene.as_deref().map_or(DEFAULT_SCENE_NAME.to_string(), |p| p.display().to_string());
     let mut written = Vec::new();
     if let Some(((first, _), path)) = part {
         // Stopped after a pass, the part holds the samples rendered: a range of its own.

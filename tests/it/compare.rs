@@ -38,6 +38,7 @@ fn options(out_dir: &Path, samplers: Vec<LightSamplerKind>, budget: Budget) -> C
         exposure: 0.0,
         progress: false,
         runs: None,
+        display: None,
     }
 }
 

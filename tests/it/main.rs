@@ -5,6 +5,7 @@ mod bsdfs;
 mod cli;
 mod common;
 mod compare;
+mod display;
 mod environment;
 mod formats;
 mod light_samplers;
