@@ -130,6 +130,9 @@ pub fn slurm(opts: &SlurmOptions) -> Result<SlurmReport> {
     };
     let (tasks, last, result) = match &opts.compare {
         None => {
+            if opts.spp == 0 {
+                return Err(Error::Usage("--spp must be at least 1".into()));
+            }
             if opts.tasks == 0 || opts.tasks > opts.spp {
                 return Err(Error::Usage(format!(
                     "--tasks {} does not fit {} spp: give 1 to {} tasks (each renders at least one sample)",

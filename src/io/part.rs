@@ -97,7 +97,9 @@ pub fn read_header(path: &Path) -> Result<PartHeader> {
     if first >= last {
         return Err(bad(path, format!("it holds samples {first}..{last}, an empty range")));
     }
-    let expected = sums_len(&header);
+    let expected = sums_len(&header).ok_or_else(|| {
+        bad(path, format!("its header claims {} × {} pixels", header.resolution[0], header.resolution[1]))
+    })?;
     let file = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
     let have = file.saturating_sub((MAGIC.len() + line.len() + 1) as u64);
     if have != expected {
@@ -112,16 +114,16 @@ pub fn read_header(path: &Path) -> Result<PartHeader> {
     Ok(header)
 }
 
-/// Bytes of sums a part of this header holds.
-fn sums_len(h: &PartHeader) -> u64 {
-    h.resolution[0] as u64 * h.resolution[1] as u64 * Film::bytes_per_pixel(h.first_hit()) as u64
+/// Bytes of sums a part of this header holds (`None` beyond what a u64 counts).
+fn sums_len(h: &PartHeader) -> Option<u64> {
+    (h.resolution[0] as u64 * h.resolution[1] as u64).checked_mul(Film::bytes_per_pixel(h.first_hit()) as u64)
 }
 
 /// Reads a part file: its header and its film.
 pub fn read(path: &Path) -> Result<(PartHeader, Film)> {
     let header = read_header(path)?;
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let sums = bytes.len().checked_sub(sums_len(&header) as usize).map(|start| &bytes[start..]);
+    let sums = sums_len(&header).and_then(|n| bytes.len().checked_sub(n as usize)).map(|start| &bytes[start..]);
     let size = UVec2::new(header.resolution[0], header.resolution[1]);
     let spp = header.samples[1] - header.samples[0];
     let film = sums
