@@ -19,8 +19,9 @@ use myriad::settings::LightSamplerKind;
 /// myriad: a path tracer for scenes lit by very many lights.
 ///
 /// Renders .ron scenes (with procedural light grids), glTF (.gltf, .glb) and .obj files to EXR, choosing
-/// lights with one of several samplers (all, uniform, power, local, tree), and compares the
-/// samplers on your own scenes (`myriad compare`).
+/// lights with one of several samplers (all, uniform, power, local, tree, learned), compares the
+/// samplers on your own scenes (`myriad compare`), streams to tev (`--display`), and splits a
+/// render into sample ranges for a cluster (`--samples`, `merge`, `slurm`).
 #[derive(Parser)]
 #[command(version, about, long_about)]
 struct Cli {
