@@ -93,23 +93,7 @@ pub fn provenance(
 /// Loads, renders and writes the outputs. Output paths are checked before rendering, so a
 /// bad path fails in milliseconds, not after the render.
 pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
-    // A sample range writes a part for `merge`, no image.
-    let part = match opts.settings.samples {
-        Some((a, b)) if a >= b => {
-            return Err(Error::Usage(format!("--samples {a}..{b} is empty: give A..B with A < B")));
-        }
-        Some(range) => Some((range, super::merge::part_path(&opts.output, range))),
-        None => None,
-    };
-    let png =
-        (!opts.no_png && part.is_none()).then(|| opts.png.clone().unwrap_or_else(|| super::preview_path(&opts.output)));
-    if part.is_none() {
-        check_outputs(&opts.output, png.as_deref())?;
-    }
-    crate::io::check_writable(part.as_ref().map_or(&opts.output, |p| &p.1))?;
-    if let Some(p) = &png {
-        crate::io::check_writable(p)?;
-    }
+    let outputs = Outputs::plan(opts)?;
     let scene_options = SceneOptions {
         load: opts.load,
         build: BuildOptions { resolution: opts.resolution, camera: opts.camera.clone() },
@@ -125,20 +109,7 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
 
     let _busy = crate::interrupt::busy();
     if opts.progress {
-        let res = settings.resolution;
-        let budget = match settings.budget {
-            Budget::Spp(n) => format!("{n} spp"),
-            Budget::Samples(a, b) => format!("samples {a}..{b}"),
-            Budget::Time(t) => format!("{} s", t.as_secs_f64()),
-        };
-        // On stderr, beside the progress bar; a closed stderr does not stop the render.
-        let _ = writeln!(
-            std::io::stderr(),
-            "rendering {} × {}, {budget}, sampler {sampler} (Ctrl-C: finish this pass and write it; twice: stop \
-             and write nothing)",
-            res.x,
-            res.y
-        );
+        announce(&settings, sampler);
     }
     let scene_name = opts.scene.as_deref().map_or(DEFAULT_SCENE_NAME.to_string(), |p| p.display().to_string());
     let display =
@@ -148,27 +119,9 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
     if output.stats.stopped == Stop::Now {
         return Err(Error::Interrupted);
     }
-
-    let mut written = Vec::new();
-    if let Some(((first, _), path)) = part {
-        // Stopped after a pass, the part holds the samples rendered: a range of its own.
-        let range = (first, first + output.film.spp());
-        if range.0 == range.1 {
-            return Err(Error::Interrupted);
-        }
-        let hash = super::merge::scene_fingerprint(&loaded, &scene_options)?;
-        let header = super::merge::part_header(&scene_name, hash, sampler, &settings, range, &output.stats);
-        crate::io::part::write(&path, &header, &output.film)?;
-        written.push(path);
-    } else {
-        let meta = provenance(&scene_name, sampler, &settings, &output.stats);
-        crate::io::exr::write(&opts.output, &output.film.layers(settings.aovs), &meta)?;
-        written.push(opts.output.clone());
-    }
-    if let Some(p) = png {
-        crate::io::png::write(&p, output.film.size(), &output.film.means(), opts.exposure)?;
-        written.push(p);
-    }
+    let made =
+        Made { loaded: &loaded, scene_options: &scene_options, scene_name: &scene_name, sampler, settings: &settings };
+    let written = outputs.write(opts, &made, &output)?;
     Ok(RenderReport {
         loaded,
         sampler,
@@ -179,6 +132,89 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
         output,
         written,
     })
+}
+
+/// Says on stderr what is about to render (beside the progress bar; a closed stderr does not
+/// stop the render).
+fn announce(settings: &RenderSettings, sampler: LightSamplerKind) {
+    let res = settings.resolution;
+    let budget = match settings.budget {
+        Budget::Spp(n) => format!("{n} spp"),
+        Budget::Samples(a, b) => format!("samples {a}..{b}"),
+        Budget::Time(t) => format!("{} s", t.as_secs_f64()),
+    };
+    let _ = writeln!(
+        std::io::stderr(),
+        "rendering {} × {}, {budget}, sampler {sampler} (Ctrl-C: finish this pass and write it; twice: stop and \
+         write nothing)",
+        res.x,
+        res.y
+    );
+}
+
+/// How a render's film was made, for what is written beside it.
+struct Made<'a> {
+    loaded: &'a LoadedScene,
+    scene_options: &'a SceneOptions,
+    scene_name: &'a str,
+    sampler: LightSamplerKind,
+    settings: &'a RenderSettings,
+}
+
+/// Where a render's results go, checked before it starts: a part for a sample range (for
+/// `merge`, no image), else the EXR; and the preview.
+struct Outputs {
+    part: Option<((u32, u32), PathBuf)>,
+    png: Option<PathBuf>,
+}
+
+impl Outputs {
+    /// The outputs `opts` asks for, each checked to be writable.
+    fn plan(opts: &RenderOptions) -> Result<Self> {
+        let part = match opts.settings.samples {
+            Some((a, b)) if a >= b => {
+                return Err(Error::Usage(format!("--samples {a}..{b} is empty: give A..B with A < B")));
+            }
+            Some(range) => Some((range, super::merge::part_path(&opts.output, range))),
+            None => None,
+        };
+        let png = (!opts.no_png && part.is_none())
+            .then(|| opts.png.clone().unwrap_or_else(|| super::preview_path(&opts.output)));
+        if part.is_none() {
+            check_outputs(&opts.output, png.as_deref())?;
+        }
+        crate::io::check_writable(part.as_ref().map_or(&opts.output, |p| &p.1))?;
+        if let Some(p) = &png {
+            crate::io::check_writable(p)?;
+        }
+        Ok(Self { part, png })
+    }
+
+    /// Writes the render's results; the files written.
+    fn write(self, opts: &RenderOptions, made: &Made, output: &RenderOutput) -> Result<Vec<PathBuf>> {
+        let mut written = Vec::new();
+        if let Some(((first, _), path)) = self.part {
+            // Stopped after a pass, the part holds the samples rendered: a range of its own.
+            let range = (first, first + output.film.spp());
+            if range.0 == range.1 {
+                return Err(Error::Interrupted);
+            }
+            let hash = super::merge::scene_fingerprint(made.loaded, made.scene_options)?;
+            let header =
+                super::merge::part_header(made.scene_name, hash, made.sampler, made.settings, range, &output.stats);
+            crate::io::part::write(&path, &header, &output.film)?;
+            written.push(path);
+        } else {
+            let meta = provenance(made.scene_name, made.sampler, made.settings, &output.stats);
+            crate::io::exr::write(&opts.output, &output.film.layers(made.settings.aovs), &meta)?;
+            written.push(opts.output.clone());
+        }
+        if let Some(p) = self.png {
+            crate::io::png::write(&p, output.film.size(), &output.film.means(), opts.exposure)?;
+            written.push(p);
+        }
+        Ok(written)
+    }
 }
 
 /// The EXR output is not a picture format's name and not the preview's path.

@@ -129,37 +129,60 @@ pub fn slurm(opts: &SlurmOptions) -> Result<SlurmReport> {
         c
     };
     let (tasks, last, result) = match &opts.compare {
-        None => {
-            if opts.spp == 0 {
-                return Err(Error::Usage("--spp must be at least 1".into()));
-            }
-            if opts.tasks == 0 || opts.tasks > opts.spp {
-                return Err(Error::Usage(format!(
-                    "--tasks {} does not fit {} spp: give 1 to {} tasks (each renders at least one sample)",
-                    opts.tasks, opts.spp, opts.spp
-                )));
-            }
-            let parts: Vec<PathBuf> =
-                (0..opts.tasks).map(|i| out.join("parts").join(format!("part-{i}.part"))).collect();
-            let tasks = ranges(opts.spp, opts.tasks)
-                .into_iter()
-                .zip(&parts)
-                .map(|((a, b), part)| Task {
-                    what: format!("samples {a}..{b}"),
-                    command: render(vec!["--samples".into(), format!("{a}..{b}"), "-o".into(), text(part)]),
-                })
-                .collect();
-            let image = out.join(format!("{stem}.exr"));
-            let mut merge = vec![text(&exe), "merge".into()];
-            merge.extend(parts.iter().map(|p| text(p)));
-            merge.extend(["-o".into(), text(&image), "--png".into()]);
-            (tasks, merge, image)
-        }
+        None => image_tasks(opts, &out, &render, &exe, &stem)?,
         Some(job) => compare_tasks(opts, job, &out, &render, &exe, &scene),
     };
     for dir in [out.clone(), out.join("parts"), out.join("runs"), out.join("logs")] {
         crate::io::ensure_dir(&dir)?;
     }
+    write_scripts(opts, &out, &stem, &scene, &tasks, &last)?;
+    let jobs = if opts.submit { Some(submit(&out)?) } else { None };
+    Ok(SlurmReport { out, tasks: tasks.into_iter().map(|t| t.what).collect(), jobs, result })
+}
+
+/// The tasks of one image (each a range of the samples) and the merge job's command line.
+fn image_tasks(
+    opts: &SlurmOptions,
+    out: &Path,
+    render: &dyn Fn(Vec<String>) -> Vec<String>,
+    exe: &Path,
+    stem: &str,
+) -> Result<(Vec<Task>, Vec<String>, PathBuf)> {
+    if opts.spp == 0 {
+        return Err(Error::Usage("--spp must be at least 1".into()));
+    }
+    if opts.tasks == 0 || opts.tasks > opts.spp {
+        return Err(Error::Usage(format!(
+            "--tasks {} does not fit {} spp: give 1 to {} tasks (each renders at least one sample)",
+            opts.tasks, opts.spp, opts.spp
+        )));
+    }
+    let text = |p: &Path| p.to_string_lossy().into_owned();
+    let parts: Vec<PathBuf> = (0..opts.tasks).map(|i| out.join("parts").join(format!("part-{i}.part"))).collect();
+    let tasks = ranges(opts.spp, opts.tasks)
+        .into_iter()
+        .zip(&parts)
+        .map(|((a, b), part)| Task {
+            what: format!("samples {a}..{b}"),
+            command: render(vec!["--samples".into(), format!("{a}..{b}"), "-o".into(), text(part)]),
+        })
+        .collect();
+    let image = out.join(format!("{stem}.exr"));
+    let mut merge = vec![text(exe), "merge".into()];
+    merge.extend(parts.iter().map(|p| text(p)));
+    merge.extend(["-o".into(), text(&image), "--png".into()]);
+    Ok((tasks, merge, image))
+}
+
+/// Writes `render.sbatch` (the array: a `case` per task) and `merge.sbatch` (`last`).
+fn write_scripts(
+    opts: &SlurmOptions,
+    out: &Path,
+    stem: &str,
+    scene: &Path,
+    tasks: &[Task],
+    last: &[String],
+) -> Result<()> {
     let cases: String = tasks
         .iter()
         .enumerate()
@@ -184,9 +207,7 @@ pub fn slurm(opts: &SlurmOptions) -> Result<SlurmReport> {
         cmd = last.iter().map(|w| quoted(w)).collect::<Vec<_>>().join(" "),
     );
     crate::io::write_text(&out.join("render.sbatch"), &array)?;
-    crate::io::write_text(&out.join("merge.sbatch"), &finish)?;
-    let jobs = if opts.submit { Some(submit(&out)?) } else { None };
-    Ok(SlurmReport { out, tasks: tasks.into_iter().map(|t| t.what).collect(), jobs, result })
+    crate::io::write_text(&out.join("merge.sbatch"), &finish)
 }
 
 /// The tasks of a comparison (each sampler with each seed, then the reference unless given)
@@ -200,68 +221,49 @@ fn compare_tasks(
     scene: &Path,
 ) -> (Vec<Task>, Vec<String>, PathBuf) {
     let text = |p: &Path| p.to_string_lossy().into_owned();
-    let runs = out.join("runs");
+    let (runs, report) = (out.join("runs"), out.join("report"));
     let mut tasks = Vec::new();
     for &kind in &job.samplers {
-        for k in 1..=job.seeds as u64 {
-            let seed = job.seed.wrapping_add(k);
-            let part = super::compare::run_part(&runs, kind, seed);
-            tasks.push(Task {
-                what: format!("{kind} seed {seed}"),
-                command: render(vec![
-                    "--samples".into(),
-                    format!("0..{}", opts.spp),
-                    "--sampler".into(),
-                    kind.name().into(),
-                    "--seed".into(),
-                    seed.to_string(),
-                    "-o".into(),
-                    text(&part),
-                ]),
-            });
+        for seed in (1..=job.seeds as u64).map(|k| job.seed.wrapping_add(k)) {
+            let part = text(&super::compare::run_part(&runs, kind, seed));
+            let range = format!("0..{}", opts.spp);
+            let args =
+                words(&["--samples", &range, "--sampler", kind.name(), "--seed", &seed.to_string(), "-o", &part]);
+            tasks.push(Task { what: format!("{kind} seed {seed}"), command: render(args) });
         }
     }
     let reference = job.reference.clone().unwrap_or_else(|| out.join("reference.exr"));
     if job.reference.is_none() {
-        tasks.push(Task {
-            what: format!("reference ({}, {} spp)", job.reference_sampler, job.reference_spp),
-            command: render(vec![
-                "--spp".into(),
-                job.reference_spp.to_string(),
-                "--sampler".into(),
-                job.reference_sampler.name().into(),
-                "--seed".into(),
-                super::compare::REFERENCE_SEED.to_string(),
-                "--aov".into(),
-                "variance".into(),
-                "--no-png".into(),
-                "-o".into(),
-                text(&reference),
-            ]),
-        });
+        let (spp, seed) = (job.reference_spp.to_string(), super::compare::REFERENCE_SEED.to_string());
+        let sampler = job.reference_sampler.name();
+        let args = words(&["--spp", &spp, "--sampler", sampler, "--seed", &seed, "--aov", "variance", "--no-png"]);
+        let args = [args, vec!["-o".into(), text(&reference)]].concat();
+        tasks.push(Task { what: format!("reference ({sampler}, {spp} spp)"), command: render(args) });
     }
-    let report = out.join("report");
     let samplers: Vec<&str> = job.samplers.iter().map(|k| k.name()).collect();
-    let mut cmd = vec![text(exe), "compare".into(), text(scene)];
-    cmd.extend([
-        "--samplers".into(),
-        samplers.join(","),
-        "--seeds".into(),
-        job.seeds.to_string(),
-        "--seed".into(),
-        job.seed.to_string(),
-        "--spp".into(),
-        opts.spp.to_string(),
-        "--runs".into(),
-        text(&runs),
-        "--reference".into(),
-        text(&reference),
-        "--out-dir".into(),
-        text(&report),
-        "--quiet".into(),
-    ]);
-    cmd.extend(opts.render_args.iter().filter(|a| !a.starts_with("--sampler")).cloned());
+    let (seeds, seed, spp) = (job.seeds.to_string(), job.seed.to_string(), opts.spp.to_string());
+    let (exe, scene, runs, reference, report_dir) =
+        (text(exe), text(scene), text(&runs), text(&reference), text(&report));
+    let mut cmd =
+        words(&[&exe, "compare", &scene, "--samplers", &samplers.join(","), "--seeds", &seeds, "--seed", &seed]);
+    cmd.extend(words(&[
+        "--spp",
+        &spp,
+        "--runs",
+        &runs,
+        "--reference",
+        &reference,
+        "--out-dir",
+        &report_dir,
+        "--quiet",
+    ]));
+    cmd.extend(opts.render_args.iter().cloned());
     (tasks, cmd, report)
+}
+
+/// Owned words of a command line.
+fn words(list: &[&str]) -> Vec<String> {
+    list.iter().map(|w| w.to_string()).collect()
 }
 
 /// `sbatch --parsable` of the array, then of the merge after it; the two job ids.
