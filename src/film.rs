@@ -30,6 +30,21 @@ pub struct AovSet {
 }
 
 impl AovSet {
+    /// Every AOV by its name (as `--aov` and part files spell them).
+    const NAMES: [&'static str; 4] = ["albedo", "normal", "depth", "variance"];
+
+    /// The set of the AOVs named (unknown names are ignored).
+    pub fn from_names<S: AsRef<str>>(names: &[S]) -> Self {
+        let has = |n: &str| names.iter().any(|s| s.as_ref() == n);
+        Self { albedo: has("albedo"), normal: has("normal"), depth: has("depth"), variance: has("variance") }
+    }
+
+    /// The names of the AOVs in the set, in [`AovSet::NAMES`] order.
+    pub fn names(&self) -> Vec<String> {
+        let on = [self.albedo, self.normal, self.depth, self.variance];
+        Self::NAMES.iter().zip(on).filter(|(_, on)| *on).map(|(n, _)| n.to_string()).collect()
+    }
+
     /// True when a first-hit AOV is requested.
     pub fn wants_first_hit(&self) -> bool {
         self.albedo || self.normal || self.depth

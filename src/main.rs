@@ -442,7 +442,6 @@ fn run(cli: Cli) -> myriad::Result<ExitCode> {
 }
 
 fn render(a: RenderArgs) -> myriad::Result<ExitCode> {
-    let has = |name: &str| a.aov.iter().any(|s| s == name);
     let opts = RenderOptions {
         scene: a.scene,
         output: a.output,
@@ -451,7 +450,7 @@ fn render(a: RenderArgs) -> myriad::Result<ExitCode> {
         settings: RenderRequest { samples: a.samples, ..a.common.request(a.sampler) },
         resolution: a.common.resolution,
         camera: a.common.camera,
-        aovs: AovSet { albedo: has("albedo"), normal: has("normal"), depth: has("depth"), variance: has("variance") },
+        aovs: AovSet::from_names(&a.aov),
         exposure: a.common.exposure,
         progress: !a.common.quiet,
         load: a.common.load.options(),

@@ -245,8 +245,18 @@ fn reference(
 fn announce(opts: &CompareOptions, plan: &Plan, scene: &Scene, ref_sampler: LightSamplerKind) -> Budget {
     let fixed = plan.budget.fixed();
     let render_ref = opts.reference.is_none();
-    let timing = |kind| if fixed.is_some() { time_per_spp(scene, kind, plan) } else { Duration::ZERO };
-    let ref_per_spp = if render_ref && opts.reference_spp.is_none() && opts.reference_time.is_none() {
+    // One timing pass per sampler at most (the reference's sampler is often a compared one).
+    let mut timed: Vec<(LightSamplerKind, Duration)> = Vec::new();
+    let mut timing = |kind| match timed.iter().find(|t| t.0 == kind) {
+        Some(&(_, t)) => t,
+        None => {
+            let t = time_per_spp(scene, kind, plan);
+            timed.push((kind, t));
+            t
+        }
+    };
+    let ref_per_spp = if render_ref && opts.reference_spp.is_none() && opts.reference_time.is_none() && fixed.is_some()
+    {
         timing(ref_sampler)
     } else {
         Duration::ZERO
@@ -265,7 +275,7 @@ fn announce(opts: &CompareOptions, plan: &Plan, scene: &Scene, ref_sampler: Ligh
     let ref_time = match budget {
         _ if !render_ref => Duration::ZERO,
         Budget::Time(t) => t,
-        b => ref_per_spp.max(timing(ref_sampler)) * b.fixed().map_or(0, |f| f.1),
+        b => timing(ref_sampler) * b.fixed().map_or(0, |f| f.1),
     };
     let reference = if render_ref {
         format!("reference {ref_sampler}, {} (≈ {:.0} s, unless cached)", budget_words(budget), ref_time.as_secs_f64())

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 use super::{LoadedScene, SceneOptions, preview_path};
 use crate::error::{Error, Result};
-use crate::film::{AovSet, Film};
+use crate::film::Film;
 use crate::fingerprint::{Fingerprint, revision};
 use crate::io::part::{self, PartHeader};
 use crate::limits::check_memory;
@@ -43,15 +43,6 @@ pub fn scene_fingerprint(loaded: &LoadedScene, options: &SceneOptions) -> Result
     Ok(key.finish())
 }
 
-/// The names of the AOVs a set keeps.
-fn aov_names(aovs: AovSet) -> Vec<String> {
-    [("albedo", aovs.albedo), ("normal", aovs.normal), ("depth", aovs.depth), ("variance", aovs.variance)]
-        .into_iter()
-        .filter(|(_, on)| *on)
-        .map(|(n, _)| n.to_string())
-        .collect()
-}
-
 /// The header of the part a render of samples `samples` wrote.
 pub fn part_header(
     scene: &str,
@@ -69,7 +60,7 @@ pub fn part_header(
         seed: settings.seed,
         max_depth: settings.max_depth,
         resolution: settings.resolution.to_array(),
-        aovs: aov_names(settings.aovs),
+        aovs: settings.aovs.names(),
         samples: [samples.0, samples.1],
         render_seconds: stats.elapsed.as_secs_f64(),
     }
@@ -136,7 +127,7 @@ pub fn merge(opts: &MergeOptions) -> Result<MergeReport> {
     let mut header = parts[0].1.clone();
     header.samples = [ranges[0].0, ranges.last().expect("one part at least").1];
     let pixels = header.resolution[0] as u64 * header.resolution[1] as u64;
-    let film_bytes = pixels * Film::bytes_per_pixel(header.aovs.iter().any(|a| a != "variance")) as u64;
+    let film_bytes = pixels * Film::bytes_per_pixel(header.aov_set().wants_first_hit()) as u64;
     // The sum so far, the part being read, and the part's file bytes.
     check_memory(3 * film_bytes, "merging these parts").map_err(Error::Usage)?;
     let mut film: Option<Film> = None;
@@ -207,25 +198,11 @@ fn difference(a: &PartHeader, b: &PartHeader) -> String {
 
 /// Writes the merged image (EXR with the provenance a render writes, and the preview).
 fn write_merged(opts: &MergeOptions, header: &PartHeader, film: &Film, png: Option<PathBuf>) -> Result<Vec<PathBuf>> {
-    let aovs = AovSet {
-        albedo: header.aovs.iter().any(|a| a == "albedo"),
-        normal: header.aovs.iter().any(|a| a == "normal"),
-        depth: header.aovs.iter().any(|a| a == "depth"),
-        variance: header.aovs.iter().any(|a| a == "variance"),
-    };
-    let meta: Vec<(String, String)> = [
-        ("myriad.revision", header.myriad.clone()),
-        ("myriad.scene", header.scene.clone()),
-        ("myriad.sampler", header.sampler.clone()),
-        ("myriad.spp", film.spp().to_string()),
-        ("myriad.seed", header.seed.to_string()),
-        ("myriad.max_depth", header.max_depth.to_string()),
-        ("myriad.samples", format!("{}..{}", header.samples[0], header.samples[1])),
-    ]
-    .into_iter()
-    .map(|(k, v)| (k.to_string(), v))
-    .collect();
-    crate::io::exr::write(&opts.output, &film.layers(aovs), &meta)?;
+    let h = header;
+    let mut meta = super::render::image_provenance(&h.scene, &h.sampler, film.spp(), h.seed, h.max_depth);
+    meta.push(("myriad.samples".into(), format!("{}..{}", h.samples[0], h.samples[1])));
+    meta.push(("myriad.parts_revision".into(), h.myriad.clone()));
+    crate::io::exr::write(&opts.output, &film.layers(h.aov_set()), &meta)?;
     let mut written = vec![opts.output.clone()];
     if let Some(p) = png {
         crate::io::png::write(&p, film.size(), &film.means(), opts.exposure)?;

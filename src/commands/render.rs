@@ -68,26 +68,33 @@ pub struct RenderReport {
     pub written: Vec<PathBuf>,
 }
 
-/// Header attributes recording how an image was made.
+/// Header attributes recording how an image was made: this myriad's version and git
+/// revision, the scene, the sampler, spp, seed and depth.
+pub fn image_provenance(scene: &str, sampler: &str, spp: u32, seed: u64, max_depth: u32) -> Vec<(String, String)> {
+    [
+        ("myriad.version", env!("CARGO_PKG_VERSION").to_string()),
+        ("myriad.git_revision", env!("MYRIAD_GIT_REVISION").to_string()),
+        ("myriad.scene", scene.to_string()),
+        ("myriad.sampler", sampler.to_string()),
+        ("myriad.spp", spp.to_string()),
+        ("myriad.seed", seed.to_string()),
+        ("myriad.max_depth", max_depth.to_string()),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect()
+}
+
+/// A render's [`image_provenance`] and its render time.
 pub fn provenance(
     scene: &str,
     sampler: LightSamplerKind,
     settings: &RenderSettings,
     stats: &crate::render::RenderStats,
 ) -> Vec<(String, String)> {
-    [
-        ("myriad.version", env!("CARGO_PKG_VERSION").to_string()),
-        ("myriad.git_revision", env!("MYRIAD_GIT_REVISION").to_string()),
-        ("myriad.scene", scene.to_string()),
-        ("myriad.sampler", sampler.name().to_string()),
-        ("myriad.spp", stats.spp.to_string()),
-        ("myriad.seed", settings.seed.to_string()),
-        ("myriad.max_depth", settings.max_depth.to_string()),
-        ("myriad.render_seconds", format!("{:.6}", stats.elapsed.as_secs_f64())),
-    ]
-    .into_iter()
-    .map(|(k, v)| (k.to_string(), v))
-    .collect()
+    let mut meta = image_provenance(scene, sampler.name(), stats.spp, settings.seed, settings.max_depth);
+    meta.push(("myriad.render_seconds".into(), format!("{:.6}", stats.elapsed.as_secs_f64())));
+    meta
 }
 
 /// Loads, renders and writes the outputs. Output paths are checked before rendering, so a

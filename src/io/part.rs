@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use super::write_atomically;
 use crate::error::{Error, Result};
-use crate::film::Film;
+use crate::film::{AovSet, Film};
 use crate::math::UVec2;
 
 /// The first line of every part file.
@@ -52,9 +52,14 @@ impl PartHeader {
         PartHeader { scene: String::new(), samples: [0, 0], render_seconds: 0.0, ..self.clone() }
     }
 
+    /// The AOVs the part keeps.
+    pub fn aov_set(&self) -> AovSet {
+        AovSet::from_names(&self.aovs)
+    }
+
     /// Whether the film keeps first-hit sums.
     fn first_hit(&self) -> bool {
-        self.aovs.iter().any(|a| a != "variance")
+        self.aov_set().wants_first_hit()
     }
 }
 

@@ -199,15 +199,20 @@ impl LearnedSampler {
         Self { factors: Arc::default(), sums: KeyMap::default(), stats: LearnedStats::default(), ..self.clone() }
     }
 
+    /// Bytes one cell takes: its sums (and map entry), and its factor row (and index entry).
+    fn cell_bytes(&self) -> (usize, usize) {
+        let sums = self.frontier.clusters as usize * std::mem::size_of::<Sums>() + 32;
+        (sums, self.frontier.runs.len() * WIDTH * 4 + 16)
+    }
+
     /// Its clusters, cells and memory bound.
     pub fn layout(&self) -> LearnedLayout {
-        let per_cell =
-            self.frontier.clusters as usize * std::mem::size_of::<Sums>() + self.frontier.runs.len() * WIDTH * 4;
+        let (sums, factors) = self.cell_bytes();
         LearnedLayout {
             clusters: self.frontier.clusters,
             top_nodes: self.frontier.runs.len(),
             cell_size: 1.0 / self.inv_cell,
-            max_bytes: MAX_CELLS * (per_cell + 48),
+            max_bytes: MAX_CELLS * (sums + factors),
         }
     }
 
@@ -223,12 +228,11 @@ impl LearnedSampler {
 
     /// Bytes of tree, frontier, sums and factors.
     pub fn memory_bytes(&self) -> usize {
-        let clusters = self.frontier.clusters as usize;
+        let (sums, factors) = self.cell_bytes();
         self.tree.stats().memory_bytes
             + self.frontier.memory_bytes()
-            + self.sums.len() * (clusters * std::mem::size_of::<Sums>() + 32)
-            + self.factors.v.len() * 4
-            + self.factors.rows.len() * 16
+            + self.sums.len() * sums
+            + self.factors.rows.len() * factors
     }
 
     /// The cell of a shading context: its grid position and the dominant axis and sign of
@@ -262,11 +266,6 @@ impl LearnedSampler {
     #[inline]
     fn mixture(&self, ctx: &ShadingContext) -> Mixture<'_> {
         Mixture { slot: &self.frontier.slot, v: self.factors_at(ctx) }
-    }
-
-    /// Prepares a band's observations (empty).
-    pub fn observations(&self) -> Observations {
-        Observations::default()
     }
 
     /// Records one light sample at `ctx`: its unshadowed contribution `c` and whether its

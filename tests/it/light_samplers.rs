@@ -5,7 +5,9 @@
 
 use crate::common::{Stats, check_cells_at, draw, pick_chi_square, sidak, z_p_value};
 use myriad::light::{AreaEmission, DistantLight, Light, LightId, PointLight, QuadLight, SpotLight, TriangleLight};
-use myriad::light_sampler::{DEFENSIVE, LEVELS, LearnedSampler, LightSampler, LightStrategy, ShadingContext};
+use myriad::light_sampler::{
+    DEFENSIVE, LEVELS, LearnedSampler, LightSampler, LightStrategy, Observations, ShadingContext,
+};
 use myriad::math::{Rgb, Vec3A};
 use myriad::sampling::{Dim, SampleStream};
 use myriad::settings::LightSamplerKind;
@@ -223,7 +225,7 @@ fn one_sample_estimator_matches_the_sum_over_point_lights() {
 /// every light with `hidden(light)` was occluded and every other one got through.
 fn trained(lights: &[Light], ctxs: &[ShadingContext], hidden: &dyn Fn(&Light) -> bool) -> LearnedSampler {
     let mut learned = LearnedSampler::new(lights, 10.0);
-    let mut seen = learned.observations();
+    let mut seen = Observations::default();
     for (i, ctx) in ctxs.iter().enumerate() {
         for k in 0..4000u64 {
             let u = SampleStream::new(99, i as u64, k).get_1d_u64(0, Dim::LightSelect, 0);
