@@ -8,6 +8,7 @@
 
 use crate::geometry::Ray;
 use crate::math::{Mat4, UVec2, Vec2, Vec3A};
+use glam::Quat;
 
 /// A camera position must be finite.
 fn check_position(name: &str, p: Vec3A) -> Result<(), String> {
@@ -68,6 +69,49 @@ impl Camera {
         Ok(Self { origin, right, up, forward, tan_half_fov_y: (0.5 * yfov).tan() })
     }
 
+    /// Where the camera is.
+    pub fn position(&self) -> Vec3A {
+        self.origin
+    }
+
+    /// The unit direction it looks in.
+    pub fn forward(&self) -> Vec3A {
+        self.forward
+    }
+
+    /// Turned about `pivot`: by `yaw` radians about the vertical `up` (unit), then by `pitch`
+    /// about its own right axis (positive: the view turns up and the camera goes down). A
+    /// pitch that would bring the view within ~8° of `up` is left out, so the view never
+    /// flips. A point at the pivot stays where it was on the image.
+    pub fn orbit(&self, pivot: Vec3A, up: Vec3A, yaw: f32, pitch: f32) -> Camera {
+        let turn = |c: &Camera, q: Quat| Camera {
+            origin: pivot + q * (c.origin - pivot),
+            right: q * c.right,
+            up: q * c.up,
+            forward: q * c.forward,
+            ..*c
+        };
+        let yawed = turn(self, Quat::from_axis_angle(up.into(), yaw));
+        let pitched = turn(&yawed, Quat::from_axis_angle(yawed.right.into(), pitch));
+        if pitched.forward.dot(up).abs() < 0.99 { pitched } else { yawed }
+    }
+
+    /// Moved by `dx` along its right and `dy` along its up, in world units.
+    pub fn pan(&self, dx: f32, dy: f32) -> Camera {
+        Camera { origin: self.origin + self.right * dx + self.up * dy, ..*self }
+    }
+
+    /// Moved `distance` along its view direction (backwards when negative).
+    pub fn dolly(&self, distance: f32) -> Camera {
+        Camera { origin: self.origin + self.forward * distance, ..*self }
+    }
+
+    /// The world-space height one pixel of an image `height` pixels high spans at `distance`
+    /// in front of the camera: how far a drag of one pixel pans there.
+    pub fn pixel_footprint(&self, distance: f32, height: u32) -> f32 {
+        2.0 * distance * self.tan_half_fov_y / height.max(1) as f32
+    }
+
     /// The primary ray through `pixel` of an image of `resolution` pixels (any size: the
     /// vertical field of view is kept) at sub-pixel offset `jitter ∈ [0,1)²`; unit direction.
     #[inline]
@@ -116,5 +160,31 @@ mod tests {
         let b = Camera::look_at(Vec3A::new(0.0, 1.0, 4.4), Vec3A::new(0.0, 1.0, 0.0), Vec3A::Y, 0.6).unwrap();
         let (ra, rb) = (a.ray(UVec2::new(1, 2), res, Vec2::splat(0.3)), b.ray(UVec2::new(1, 2), res, Vec2::splat(0.3)));
         assert!((ra.dir - rb.dir).length() < 1e-6);
+    }
+
+    #[test]
+    fn orbit_keeps_the_pivot_at_the_centre_and_its_distance() {
+        let res = UVec2::new(40, 30);
+        let pivot = Vec3A::new(0.0, 1.0, 0.0);
+        let cam = Camera::look_at(Vec3A::new(0.0, 1.0, 4.0), pivot, Vec3A::Y, 0.6).unwrap();
+        let moved = cam.orbit(pivot, Vec3A::Y, 0.7, 0.3);
+        assert!(((moved.position() - pivot).length() - 4.0).abs() < 1e-4);
+        let centre = moved.ray(UVec2::new(20, 15), res, Vec2::ZERO);
+        assert!((centre.dir - (pivot - moved.position()).normalize()).length() < 1e-5);
+        assert!(moved.position().y < 1.0, "a positive pitch looks up from below");
+        // Yaw alone keeps the height; a pitch past the vertical is dropped.
+        assert!((cam.orbit(pivot, Vec3A::Y, 1.0, 0.0).position().y - 1.0).abs() < 1e-5);
+        let steep = cam.orbit(pivot, Vec3A::Y, 0.0, 1.6);
+        assert!((steep.position().y - 1.0).abs() < 1e-5, "{}", steep.position());
+    }
+
+    #[test]
+    fn pan_and_dolly_move_along_the_camera_axes() {
+        let cam = Camera::look_at(Vec3A::new(0.0, 1.0, 4.0), Vec3A::new(0.0, 1.0, 0.0), Vec3A::Y, 0.6).unwrap();
+        let p = cam.pan(0.5, 0.25).dolly(1.0);
+        assert!((p.position() - Vec3A::new(0.5, 1.25, 3.0)).length() < 1e-6);
+        assert_eq!(p.forward(), cam.forward());
+        // The top edge of a 30-pixel image at distance 4 is 4·tan(0.3) above the axis.
+        assert!((cam.pixel_footprint(4.0, 30) * 15.0 - 4.0 * 0.3f32.tan()).abs() < 1e-5);
     }
 }

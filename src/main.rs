@@ -76,6 +76,17 @@ enum Command {
     /// into OUT/SCENE.exr, bit-identical to one render. The scene, the myriad binary and OUT
     /// must be on a file system every node sees.
     Slurm(SlurmArgs),
+    /// Watch a scene converge in a window, switching light samplers live.
+    ///
+    /// The render refines pass after pass (1 spp at first, so an image appears at once) until
+    /// --spp or --time, if given. Keys: 1-6 pick the sampler (all, uniform, power, local,
+    /// tree, learned; the accumulation restarts), + and - change the exposure, E flips to the
+    /// false-colour relative error against the reference (--reference, or the one `myriad
+    /// compare` cached in compare-NAME/), S saves the image so far as
+    /// OUT-DIR/view-SAMPLER-Nspp.exr, R puts the camera back, Esc or Q closes. Mouse: drag
+    /// to orbit, right-drag (or shift-drag) to pan, wheel to dolly. The image at N spp is
+    /// the one `myriad render --spp N` makes with the same seed. Needs a display (X11).
+    View(ViewArgs),
     /// Load a scene and report what it holds: triangles, lights, power, build times, memory.
     Info {
         /// Scene file (.ron, .obj, .gltf or .glb); default: the built-in Cornell box.
@@ -86,6 +97,26 @@ enum Command {
         #[command(flatten)]
         load: LoadArgs,
     },
+}
+
+#[derive(Args)]
+struct ViewArgs {
+    /// Scene file (.ron, .obj, .gltf or .glb); default: the built-in Cornell box.
+    scene: Option<PathBuf>,
+    /// The light sampler to start with.
+    #[arg(long, value_parser = sampler_parser())]
+    sampler: Option<LightSamplerKind>,
+    /// Reference EXR for the error view (E), of the view's size.
+    #[arg(long)]
+    reference: Option<PathBuf>,
+    /// Folder the save key (S) writes to.
+    #[arg(long, default_value = ".")]
+    out_dir: PathBuf,
+    /// Close the window once --spp or --time is reached (for scripts and benchmarks).
+    #[arg(long)]
+    exit_when_done: bool,
+    #[command(flatten)]
+    common: CommonArgs,
 }
 
 #[derive(Args)]
@@ -398,6 +429,7 @@ fn run(cli: Cli) -> myriad::Result<ExitCode> {
     }
     match cli.command {
         Command::Render(a) => return render(a),
+        Command::View(a) => return view(a),
         Command::Compare(a) => compare(a)?,
         Command::Slurm(a) => {
             let out = a.out.clone().unwrap_or_else(|| {
@@ -462,10 +494,26 @@ fn render(a: RenderArgs) -> myriad::Result<ExitCode> {
     Ok(if stopped { ExitCode::from(myriad::interrupt::EXIT_STATUS) } else { ExitCode::SUCCESS })
 }
 
+fn view(a: ViewArgs) -> myriad::Result<ExitCode> {
+    let opts = myriad::commands::view::ViewOptions {
+        scene: a.scene,
+        settings: a.common.request(a.sampler),
+        resolution: a.common.resolution,
+        camera: a.common.camera,
+        load: a.common.load.options(),
+        exposure: a.common.exposure,
+        reference: a.reference,
+        out_dir: a.out_dir,
+        exit_when_done: a.exit_when_done,
+        quiet: a.common.quiet,
+    };
+    let report = myriad::commands::view::view(&opts)?;
+    say(&report);
+    Ok(if report.interrupted { ExitCode::from(myriad::interrupt::EXIT_STATUS) } else { ExitCode::SUCCESS })
+}
+
 fn compare(a: CompareArgs) -> myriad::Result<()> {
-    let out_dir = a.out_dir.unwrap_or_else(|| {
-        PathBuf::from(format!("compare-{}", a.scene.file_stem().map_or("scene".into(), |s| s.to_string_lossy())))
-    });
+    let out_dir = a.out_dir.unwrap_or_else(|| myriad::commands::compare::default_out_dir(Some(&a.scene)));
     let opts = CompareOptions {
         scene: a.scene,
         samplers: a.samplers,

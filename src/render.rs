@@ -325,23 +325,87 @@ impl Learner {
     }
 }
 
+/// A render that grows pass by pass: the film, the learning state and the counts. [`render`]
+/// drives one to a budget; a viewer drives one itself, a pass at a time, and starts a new one
+/// when the view changes.
+///
+/// A strategy that learns starts from nothing here and learns between passes, at every
+/// power of two of spp up to [`LEARN_UNTIL`]: [`Progressive::pass`] ends passes there, so
+/// what it learns depends on the samples, not on how passes split them.
+pub struct Progressive<'a> {
+    scene: &'a Scene,
+    strategy: &'a LightStrategy,
+    settings: RenderSettings,
+    film: Film,
+    learner: Option<Learner>,
+    /// Index of the first sample (a sample range's start; 0 otherwise).
+    offset: u32,
+    rays: RayCounters,
+    non_finite: u64,
+}
+
+impl<'a> Progressive<'a> {
+    /// An empty film for `settings` (its budget only gives the first sample index); a range
+    /// starting past 0 first trains a learning strategy on the samples before it.
+    pub fn new(scene: &'a Scene, strategy: &'a LightStrategy, settings: &RenderSettings) -> Self {
+        let offset = settings.budget.fixed().map_or(0, |f| f.0);
+        let mut learner = strategy.fresh_learner().map(|strategy| Learner { strategy, pending: Vec::new() });
+        let mut rays = RayCounters::default();
+        if let Some(l) = learner.as_mut().filter(|_| offset > 0) {
+            rays.add(&l.train(scene, settings, offset.min(LEARN_UNTIL)));
+        }
+        let film = Film::new(settings.resolution, settings.aovs.wants_first_hit());
+        Self { scene, strategy, settings: *settings, film, learner, offset, rays, non_finite: 0 }
+    }
+
+    /// Adds the next `count` samples of every pixel (fewer when the strategy must learn
+    /// first), telling `progress` as bands finish; returns how many it added.
+    pub fn pass(&mut self, count: u32, progress: Option<&dyn RenderObserver>) -> u32 {
+        let first = self.offset + self.film.spp();
+        let learning = self.learner.as_ref().is_some_and(|l| l.wants(first));
+        let count = if learning { count.min((first + 1).next_power_of_two() - first) } else { count };
+        let current = self.learner.as_ref().map_or(self.strategy, |l| &l.strategy);
+        let pass = render_pass(self.scene, current, &self.settings, &mut self.film, first, count, learning, progress);
+        self.rays.add(&pass.rays);
+        self.non_finite += pass.non_finite;
+        if let Some(l) = self.learner.as_mut().filter(|_| learning) {
+            l.after_pass(pass.seen, first + count);
+        }
+        count
+    }
+
+    /// Every sample so far.
+    pub fn film(&self) -> &Film {
+        &self.film
+    }
+
+    /// The film and its statistics, the render having taken `elapsed`.
+    pub fn finish(self, elapsed: Duration, stopped: Stop) -> RenderOutput {
+        let size = self.settings.resolution;
+        let spp = self.film.spp();
+        let stats = RenderStats {
+            elapsed,
+            spp,
+            samples: size.x as u64 * size.y as u64 * spp as u64,
+            rays: self.rays,
+            non_finite_samples: self.non_finite,
+            learned: self.learner.as_ref().and_then(|l| l.strategy.learner()).map(|l| l.stats()),
+            stopped,
+        };
+        RenderOutput { film: self.film, stats }
+    }
+}
+
 /// Renders `scene` with `strategy` in the current rayon pool, telling `observer` how far it
 /// is and showing it the film after every pass ([`next_pass`] sizes them). A stop the user
 /// asks for ([`crate::interrupt`]) ends the render after the pass under way, or at once.
-///
-/// A strategy that learns starts from nothing in every render and learns between passes,
-/// at every power of two of spp up to [`LEARN_UNTIL`]: passes end there whatever the budget,
-/// so what it learns depends on the samples, not on the timing.
 pub fn render(
     scene: &Scene,
     strategy: &LightStrategy,
     settings: &RenderSettings,
     observer: &mut dyn RenderObserver,
 ) -> RenderOutput {
-    let size = settings.resolution;
-    let pixels = size.x as u64 * size.y as u64;
-    let mut film = Film::new(size, settings.aovs.wants_first_hit());
-    let mut stats = RenderStats::default();
+    let pixels = settings.resolution.x as u64 * settings.resolution.y as u64;
     let start = Instant::now();
     let fixed = settings.budget.fixed();
     observer.start(match (fixed, settings.budget) {
@@ -349,47 +413,28 @@ pub fn render(
         (None, Budget::Time(limit)) => limit.as_millis() as u64,
         (None, _) => unreachable!("a budget without spp is a time"),
     });
-    let (mut per_spp, mut reported_ms) = (None, 0);
-    let offset = fixed.map_or(0, |f| f.0);
-    let mut learner = strategy.fresh_learner().map(|strategy| Learner { strategy, pending: Vec::new() });
-    if let Some(l) = learner.as_mut().filter(|_| offset > 0) {
-        stats.rays.add(&l.train(scene, settings, offset.min(LEARN_UNTIL)));
-    }
-    while let Some(mut count) = next_pass(settings.budget, film.spp(), per_spp, start.elapsed()) {
+    let (mut per_spp, mut reported_ms, mut stopped) = (None, 0, Stop::No);
+    let mut progressive = Progressive::new(scene, strategy, settings);
+    while let Some(count) = next_pass(settings.budget, progressive.film().spp(), per_spp, start.elapsed()) {
         let t0 = Instant::now();
-        let first = offset + film.spp();
-        let learning = learner.as_ref().is_some_and(|l| l.wants(first));
-        if learning {
-            count = count.min((first + 1).next_power_of_two() - first);
-        }
         let progress = Some(&*observer).filter(|_| fixed.is_some());
-        let current = learner.as_ref().map_or(strategy, |l| &l.strategy);
-        let pass = render_pass(scene, current, settings, &mut film, first, count, learning, progress);
-        stats.rays.add(&pass.rays);
-        stats.non_finite_samples += pass.non_finite;
-        if let Some(l) = learner.as_mut().filter(|_| learning) {
-            l.after_pass(pass.seen, first + count);
-        }
+        let count = progressive.pass(count, progress);
         per_spp = Some(t0.elapsed() / count);
-        stats.stopped = interrupt::requested();
-        if stats.stopped == Stop::Now {
+        stopped = interrupt::requested();
+        if stopped == Stop::Now {
             break;
         }
-        observer.pass(&film, start.elapsed());
+        observer.pass(progressive.film(), start.elapsed());
         if let Budget::Time(limit) = settings.budget {
             let ms = start.elapsed().min(limit).as_millis() as u64;
             observer.advance(ms - reported_ms);
             reported_ms = ms;
         }
-        if stats.stopped == Stop::AfterPass {
+        if stopped == Stop::AfterPass {
             break;
         }
     }
-    stats.elapsed = start.elapsed();
-    stats.learned = learner.as_ref().and_then(|l| l.strategy.learner()).map(|l| l.stats());
-    stats.spp = film.spp();
-    stats.samples = pixels * film.spp() as u64;
-    RenderOutput { film, stats }
+    progressive.finish(start.elapsed(), stopped)
 }
 
 #[cfg(test)]

@@ -88,14 +88,17 @@ struct Reference {
 }
 
 /// A reference as read from disk: RGB, variance (zeros when absent) and header attributes.
-struct ReferenceFile {
-    pixels: Vec<Rgb>,
-    variance: Vec<Rgb>,
-    meta: Vec<(String, String)>,
+pub(crate) struct ReferenceFile {
+    /// Its RGB.
+    pub pixels: Vec<Rgb>,
+    /// Its variance layer (zeros when absent).
+    pub variance: Vec<Rgb>,
+    /// Its header attributes.
+    pub meta: Vec<(String, String)>,
 }
 
 /// Reads an EXR's RGB (and variance when present), checking its size.
-fn read_reference(path: &Path, size: UVec2) -> Result<ReferenceFile> {
+pub(crate) fn read_reference(path: &Path, size: UVec2) -> Result<ReferenceFile> {
     let (layers, meta) = crate::io::exr::read(path)?;
     if layers.size != size {
         return Err(Error::Input {
@@ -364,6 +367,14 @@ impl Plan {
             Budget::Time(t) => format!("equal time ({} s)", t.as_secs_f64()),
         }
     }
+}
+
+/// Where `compare` writes for `scene` unless told (`compare-NAME` in the current folder,
+/// NAME the file's stem; `compare-scene` for the built-in one), and where `view` looks for
+/// the reference it cached.
+pub fn default_out_dir(scene: Option<&Path>) -> PathBuf {
+    let stem = scene.and_then(|s| s.file_stem()).map_or("scene".into(), |s| s.to_string_lossy());
+    PathBuf::from(format!("compare-{stem}"))
 }
 
 /// Runs the comparison and writes every output into `opts.out_dir`: reference → each sampler

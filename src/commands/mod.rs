@@ -14,6 +14,7 @@ pub mod progress;
 pub mod render;
 pub mod settings;
 pub mod slurm;
+pub mod view;
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};

@@ -59,19 +59,21 @@ pub fn preview_picture(size: UVec2, pixels: &[Rgb], stops: f32) -> Picture {
     Picture { size, bytes: to_srgb8(pixels, stops) }
 }
 
-/// A blank canvas to compose pictures and text on.
-struct Canvas {
+/// A canvas to compose pictures and text on (the contact sheet, the viewer's status bar).
+pub struct Canvas {
     pic: Picture,
     font: FontRef<'static>,
 }
 
 impl Canvas {
-    fn new(size: UVec2, grey: u8) -> Self {
+    /// A `size` canvas filled with the grey level `grey`.
+    pub fn new(size: UVec2, grey: u8) -> Self {
         let font = FontRef::try_from_slice(FONT).expect("the bundled font parses");
         Self { pic: Picture { size, bytes: vec![grey; (size.x * size.y * 3) as usize] }, font }
     }
 
-    fn blit(&mut self, src: &Picture, x0: u32, y0: u32) {
+    /// Copies `src` with its top-left corner at (x0, y0), clipped at the canvas's edges.
+    pub fn blit(&mut self, src: &Picture, x0: u32, y0: u32) {
         for y in 0..src.size.y.min(self.pic.size.y.saturating_sub(y0)) {
             let w = src.size.x.min(self.pic.size.x.saturating_sub(x0)) as usize;
             let s = (y * src.size.x) as usize * 3;
@@ -110,9 +112,15 @@ impl Canvas {
         }
     }
 
-    fn text(&mut self, text: &str, x: f32, y: f32, px: f32, color: [u8; 3]) {
+    /// Draws `text` with its top-left corner at (x, y), `px` pixels high, in `color`.
+    pub fn text(&mut self, text: &str, x: f32, y: f32, px: f32, color: [u8; 3]) {
         let x_max = self.pic.size.x as f32;
         self.text_clipped(text, x, y, px, color, x_max);
+    }
+
+    /// What was drawn.
+    pub fn picture(self) -> Picture {
+        self.pic
     }
 }
 
@@ -165,7 +173,7 @@ pub fn contact_sheet(columns: &[SheetColumn]) -> Picture {
     canvas.text("1e-3", pad as f32, label_y, 12.0, [200, 200, 200]);
     canvas.text("relative error (log)", (pad + bar_w / 2 - 70) as f32, label_y, 12.0, [200, 200, 200]);
     canvas.text("1", (pad + bar_w - 8) as f32, label_y, 12.0, [200, 200, 200]);
-    canvas.pic
+    canvas.picture()
 }
 
 #[cfg(test)]

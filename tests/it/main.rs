@@ -14,3 +14,4 @@ mod render;
 mod scene_loading;
 mod slurm;
 mod split;
+mod view;

@@ -1,0 +1,204 @@
+//! The viewer's render thread: one [`Progressive`] render at a time, restarted whenever the
+//! window asks for another view (sampler or camera), each pass's image sent to the window.
+//! A view starts with a 1-spp preview at half the width and height (a quarter of the work,
+//! so the first image comes at once), then passes of half the time accumulated so far, from
+//! [`MIN_PASS`] to [`MAX_PASS`]: frequent images while they change most, few enough that
+//! copying and drawing them costs ~3 % (`tools/view_bench.py`); a restart waits
+//! [`MAX_PASS`] at most.
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::sync::mpsc::{Receiver, Sender, TryRecvError};
+use std::time::{Duration, Instant};
+
+use crate::camera::Camera;
+use crate::film::AovSet;
+use crate::interrupt::{self, Stop};
+use crate::light_sampler::LightStrategy;
+use crate::math::{Rgb, UVec2};
+use crate::render::{Budget, Progressive, RenderSettings};
+use crate::scene::Scene;
+use crate::settings::LightSamplerKind;
+
+/// The shortest pass after the first.
+pub const MIN_PASS: Duration = Duration::from_millis(100);
+/// The longest pass (unless one sample per pixel takes longer).
+pub const MAX_PASS: Duration = Duration::from_millis(500);
+/// Images of at least this many pixels get a preview first.
+const PREVIEW_PIXELS: u32 = 128 * 96;
+
+/// What the window wants rendered; a later view replaces an earlier one.
+#[derive(Clone, Copy, Debug)]
+pub struct View {
+    /// Numbers the views in the order asked, so that frames of an older one are dropped.
+    pub generation: u64,
+    /// The light sampler.
+    pub sampler: LightSamplerKind,
+    /// Where the camera is.
+    pub camera: Camera,
+}
+
+/// What the window asks of the render thread.
+pub enum Order {
+    /// Restart the accumulation with this view.
+    Show(View),
+    /// Write the image so far (EXR, with its provenance) into this folder, named after its
+    /// sampler and spp.
+    Save(PathBuf),
+    /// Stop.
+    Quit,
+}
+
+/// The image after a pass.
+pub struct Frame {
+    /// The view it shows.
+    pub generation: u64,
+    /// Its sampler.
+    pub sampler: LightSamplerKind,
+    /// Mean of each pixel, row-major.
+    pub pixels: Vec<Rgb>,
+    /// Samples per pixel so far (0: the half-resolution preview).
+    pub spp: u32,
+    /// Camera samples per second since this view's accumulation began.
+    pub samples_per_second: f64,
+    /// Whether the accumulation has reached its cap (`--spp` or `--time`) and stopped.
+    pub done: bool,
+}
+
+/// What the render thread tells the window.
+pub enum Report {
+    /// A pass finished.
+    Frame(Frame),
+    /// The image was saved there.
+    Saved(PathBuf),
+    /// Something failed (building a sampler, writing a file); the view goes on.
+    Failed(String),
+}
+
+/// What a view accumulates and for how long.
+#[derive(Clone, Debug)]
+pub struct Accumulate {
+    /// Seed, depth, size (the budget is not used: see `spp` and `time`).
+    pub settings: RenderSettings,
+    /// Stop refining at this many samples per pixel.
+    pub spp: u32,
+    /// Stop refining after this long, if set.
+    pub time: Option<Duration>,
+    /// The scene's name, for the provenance of saved images.
+    pub scene_name: String,
+}
+
+/// Runs views until told to quit (or the user stops the process): renders `scene` (whose
+/// camera it moves), building each sampler the first time it is asked for.
+pub fn run(scene: &mut Scene, plan: &Accumulate, orders: Receiver<Order>, reports: Sender<Report>) {
+    let mut strategies: HashMap<LightSamplerKind, LightStrategy> = HashMap::new();
+    let Ok(Order::Show(mut view)) = orders.recv() else { return };
+    loop {
+        scene.camera = view.camera;
+        let strategy = strategies
+            .entry(view.sampler)
+            .or_insert_with(|| LightStrategy::build(view.sampler, &scene.lights, scene.radius));
+        match accumulate(scene, strategy, view, plan, &orders, &reports) {
+            Some(next) => view = next,
+            None => return,
+        }
+    }
+}
+
+/// Refines one view until it is done, then waits; returns the next view, or `None` to quit.
+fn accumulate(
+    scene: &Scene,
+    strategy: &LightStrategy,
+    view: View,
+    plan: &Accumulate,
+    orders: &Receiver<Order>,
+    reports: &Sender<Report>,
+) -> Option<View> {
+    let settings = RenderSettings { budget: Budget::Spp(plan.spp), ..plan.settings };
+    let size = settings.resolution;
+    if size.x * size.y >= PREVIEW_PIXELS
+        && reports.send(Report::Frame(preview(scene, strategy, view, &settings))).is_err()
+    {
+        return None;
+    }
+    let mut progressive = Progressive::new(scene, strategy, &settings);
+    let start = Instant::now();
+    let mut count = 1;
+    loop {
+        let done = progressive.film().spp() >= plan.spp || plan.time.is_some_and(|t| start.elapsed() >= t);
+        // Every order waiting, the last view winning; when done, wait for one.
+        let mut next = None;
+        loop {
+            let order = if done && next.is_none() {
+                orders.recv().map_err(|_| TryRecvError::Disconnected)
+            } else {
+                orders.try_recv()
+            };
+            match order {
+                Ok(Order::Show(v)) => next = Some(v),
+                Ok(Order::Save(dir)) => {
+                    let _ = reports.send(save(&progressive, &dir, view.sampler, &settings, plan, start.elapsed()));
+                }
+                Ok(Order::Quit) | Err(TryRecvError::Disconnected) => return None,
+                Err(TryRecvError::Empty) => break,
+            }
+        }
+        if next.is_some() {
+            return next;
+        }
+        if interrupt::requested() != Stop::No {
+            return None;
+        }
+        let t0 = Instant::now();
+        let rendered = progressive.pass(count.min(plan.spp - progressive.film().spp()), None);
+        let per_spp = t0.elapsed().as_secs_f64() / rendered as f64;
+        let elapsed = start.elapsed();
+        let target = (elapsed / 2).clamp(MIN_PASS, MAX_PASS);
+        count = (target.as_secs_f64() / per_spp.max(1e-9)).clamp(1.0, 1024.0) as u32;
+        let film = progressive.film();
+        let frame = Frame {
+            generation: view.generation,
+            sampler: view.sampler,
+            pixels: film.means(),
+            spp: film.spp(),
+            samples_per_second: size.x as f64 * size.y as f64 * film.spp() as f64 / elapsed.as_secs_f64().max(1e-9),
+            done: film.spp() >= plan.spp || plan.time.is_some_and(|t| elapsed >= t),
+        };
+        if reports.send(Report::Frame(frame)).is_err() {
+            return None;
+        }
+    }
+}
+
+/// One sample per pixel at half the width and height, each pixel shown as 2 × 2.
+fn preview(scene: &Scene, strategy: &LightStrategy, view: View, settings: &RenderSettings) -> Frame {
+    let full = settings.resolution;
+    let half = UVec2::new(full.x.div_ceil(2), full.y.div_ceil(2));
+    let mut small = Progressive::new(scene, strategy, &RenderSettings { resolution: half, ..*settings });
+    small.pass(1, None);
+    let means = small.film().means();
+    let pixels = (0..full.y)
+        .flat_map(|y| (0..full.x).map(move |x| (y / 2 * half.x + x / 2) as usize))
+        .map(|i| means[i])
+        .collect();
+    Frame { generation: view.generation, sampler: view.sampler, pixels, spp: 0, samples_per_second: 0.0, done: false }
+}
+
+/// Writes the view's image so far into `dir` as `view-SAMPLER-Nspp.exr`, with its provenance.
+fn save(
+    progressive: &Progressive,
+    dir: &std::path::Path,
+    sampler: LightSamplerKind,
+    settings: &RenderSettings,
+    plan: &Accumulate,
+    elapsed: Duration,
+) -> Report {
+    let film = progressive.film();
+    let path = dir.join(format!("view-{sampler}-{}spp.exr", film.spp()));
+    let stats = crate::render::RenderStats { spp: film.spp(), elapsed, ..Default::default() };
+    let meta = super::super::render::provenance(&plan.scene_name, sampler, settings, &stats);
+    match crate::io::exr::write(&path, &film.layers(AovSet::default()), &meta) {
+        Ok(()) => Report::Saved(path),
+        Err(e) => Report::Failed(e.to_string()),
+    }
+}
