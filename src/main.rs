@@ -61,6 +61,10 @@ enum Command {
         /// Write a false-colour relative-error PNG here.
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Write a self-contained HTML page here to flip between the two, zoom, change the
+        /// exposure and see the error maps and pixel values (as compare's report.html).
+        #[arg(long)]
+        html: Option<PathBuf>,
     },
     /// Join the parts of a render split into sample ranges into one EXR.
     ///
@@ -464,7 +468,9 @@ fn run(cli: Cli) -> myriad::Result<ExitCode> {
             exposure: a.exposure,
             allow_gaps: a.allow_gaps,
         })?),
-        Command::Diff { image, reference, out } => say(diff(&image, &reference, out.as_deref())?),
+        Command::Diff { image, reference, out, html } => {
+            say(diff(&myriad::commands::diff::DiffOptions { image, reference, error_png: out, html })?)
+        }
         Command::Info { scene, camera, load } => {
             let options = SceneOptions { load: load.options(), build: BuildOptions { resolution: None, camera } };
             say(info(scene.as_deref(), &options)?);

@@ -14,6 +14,7 @@ use std::time::{Duration, Instant};
 use super::progress::Progress;
 use super::settings::{COMPARE_DEFAULT_SPP, RenderRequest, Resolved};
 use super::{LoadedScene, SceneOptions, load_scene};
+use crate::compare::html::{self, Page, PageImage};
 use crate::compare::images::{SheetColumn, contact_sheet, error_picture, preview_picture};
 use crate::compare::metrics::{BIAS_ALPHA, REL_MSE_EPSILON, bias_check, efficiency, error_metrics, relative_error_map};
 use crate::compare::plot::{Curve, convergence_svg};
@@ -411,9 +412,12 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
     let mut results = Vec::new();
     // The least noisy run's own noise and image, to judge the reference's noise by.
     let mut quietest: Option<(f64, Vec<Rgb>)> = None;
+    // Each sampler's first-seed image, for the HTML page.
+    let mut images = Vec::new();
     for &kind in &plan.samplers {
         let runs = run_sampler(opts, &plan, &loaded, runs_from, kind, &reference)?;
         let means = runs.first.means();
+        images.push(means.clone());
         let variance: Vec<Rgb> = (0..means.len()).map(|i| runs.first.variance_of_mean(i)).collect();
         let noise = relative_noise(&variance, &means);
         if quietest.as_ref().is_none_or(|q| noise < q.0) {
@@ -437,7 +441,9 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
         samplers: results,
         files: Vec::new(),
     };
-    write_report(opts, report, &columns)
+    let mut pictures = vec![reference.pixels];
+    pictures.extend(images);
+    write_report(opts, report, &columns, &pictures)
 }
 
 /// One sampler's renders over every seed.
@@ -683,11 +689,55 @@ fn file_name(p: &Path) -> String {
     p.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned())
 }
 
-/// Writes the contact sheet, the convergence plot, report.md and report.json.
-fn write_report(opts: &CompareOptions, mut report: CompareReport, columns: &[SheetColumn]) -> Result<CompareReport> {
+/// The comparison as an HTML page: every image with its caption, the metrics, the plot, the
+/// settings and where the numbers come from.
+fn html_page(
+    opts: &CompareOptions,
+    report: &CompareReport,
+    columns: &[SheetColumn],
+    images: &[Vec<Rgb>],
+    svg: &str,
+) -> String {
+    let size = UVec2::new(report.resolution[0], report.resolution[1]);
+    let images = columns
+        .iter()
+        .zip(images)
+        .map(|(c, pixels)| PageImage { name: c.title.clone(), caption: c.caption.replace('\n', ", "), pixels })
+        .collect();
+    let seeds: Vec<String> =
+        report.samplers.first().map_or(Vec::new(), |s| s.runs.iter().map(|r| r.seed.to_string()).collect());
+    let facts = [
+        ("scene", report.scene.clone()),
+        ("mode", report.mode.clone()),
+        ("size", format!("{} × {} px", size.x, size.y)),
+        ("max depth", report.max_depth.to_string()),
+        ("threads", report.threads.to_string()),
+        ("seeds", seeds.join(", ")),
+        ("reference", format!("{} ({})", report.reference.path, report.reference.origin)),
+        ("myriad", format!("{} ({})", env!("CARGO_PKG_VERSION"), env!("MYRIAD_GIT_REVISION"))),
+    ];
+    html::page(&Page {
+        title: format!("myriad compare: {} ({})", file_name(&opts.scene), report.mode),
+        size,
+        images,
+        table: report.metrics(),
+        plot_svg: Some(svg.to_string()),
+        facts: facts.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
+        exposure: opts.exposure,
+    })
+}
+
+/// Writes the contact sheet, the convergence plot, report.md, report.json and report.html
+/// (`images`: the reference's, then each column's pixels).
+fn write_report(
+    opts: &CompareOptions,
+    mut report: CompareReport,
+    columns: &[SheetColumn],
+    images: &[Vec<Rgb>],
+) -> Result<CompareReport> {
     let out = |name: &str| opts.out_dir.join(name);
-    let (sheet_path, plot_path, md_path, json_path) =
-        (out("contact-sheet.png"), out("convergence.svg"), out("report.md"), out("report.json"));
+    let (sheet_path, plot_path, md_path, json_path, html_path) =
+        (out("contact-sheet.png"), out("convergence.svg"), out("report.md"), out("report.json"), out("report.html"));
     let sheet = contact_sheet(columns);
     crate::io::png::write_srgb8(&sheet_path, sheet.size, sheet.bytes)?;
     let curves: Vec<Curve> = report
@@ -698,7 +748,8 @@ fn write_report(opts: &CompareOptions, mut report: CompareReport, columns: &[She
     let svg = convergence_svg(&format!("{} ({})", file_name(&opts.scene), report.mode), &curves)
         .map_err(|m| Error::Output { path: plot_path.clone(), message: m })?;
     crate::io::write_text(&plot_path, &svg)?;
-    report.files = [&sheet_path, &plot_path, &md_path, &json_path].iter().map(|p| file_name(p)).collect();
+    report.files = [&sheet_path, &plot_path, &md_path, &json_path, &html_path].iter().map(|p| file_name(p)).collect();
+    crate::io::write_text(&html_path, &html_page(opts, &report, columns, images, &svg))?;
     crate::io::write_text(&md_path, &report.markdown(&file_name(&sheet_path), &file_name(&plot_path)))?;
     let json = serde_json::to_string_pretty(&report)
         .map_err(|e| Error::Output { path: json_path.clone(), message: e.to_string() })?;

@@ -1,11 +1,12 @@
 //! `myriad diff`: the compare metrics between two EXR files.
 
 use std::fmt;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
+use crate::compare::html::{self, Page, PageImage};
 use crate::compare::images::error_picture;
 use crate::compare::metrics::{ErrorMetrics, error_metrics, relative_error_map};
-use crate::compare::report::num;
+use crate::compare::report::{Table, num};
 use crate::error::{Error, Result};
 use crate::math::Rgb;
 
@@ -26,9 +27,23 @@ fn mean(pixels: &[Rgb]) -> Rgb {
     Rgb::new((sum[0] / n) as f32, (sum[1] / n) as f32, (sum[2] / n) as f32)
 }
 
-/// Compares `image` against `reference` (EXR files with R, G, B of the same size); writes a
-/// false-colour relative-error PNG to `error_png` when given.
-pub fn diff(image: &Path, reference: &Path, error_png: Option<&Path>) -> Result<DiffReport> {
+/// What `diff` compares and writes.
+#[derive(Clone, Debug, Default)]
+pub struct DiffOptions {
+    /// The image to judge.
+    pub image: PathBuf,
+    /// The reference.
+    pub reference: PathBuf,
+    /// A false-colour relative-error PNG to write.
+    pub error_png: Option<PathBuf>,
+    /// An HTML page to write (the two images, as compare's report.html shows them).
+    pub html: Option<PathBuf>,
+}
+
+/// Compares `image` against `reference` (EXR files with R, G, B of the same size); writes
+/// the error PNG and the page when asked.
+pub fn diff(opts: &DiffOptions) -> Result<DiffReport> {
+    let (image, reference) = (opts.image.as_path(), opts.reference.as_path());
     let read = |p: &Path| -> Result<_> {
         let (layers, _) = crate::io::exr::read(p)?;
         let rgb =
@@ -43,11 +58,41 @@ pub fn diff(image: &Path, reference: &Path, error_png: Option<&Path>) -> Result<
         });
     }
     let metrics = error_metrics(&a, &b)?;
-    if let Some(p) = error_png {
+    if let Some(p) = &opts.error_png {
         let pic = error_picture(sa, &relative_error_map(&a, &b));
         crate::io::png::write_srgb8(p, pic.size, pic.bytes)?;
     }
-    Ok(DiffReport { metrics, size: sa, means: [mean(&a), mean(&b)] })
+    let report = DiffReport { metrics, size: sa, means: [mean(&a), mean(&b)] };
+    if let Some(p) = &opts.html {
+        crate::io::write_text(p, &page(opts, &report, &a, &b))?;
+    }
+    Ok(report)
+}
+
+/// The two images on compare's HTML page: the reference first, the metrics, both paths.
+fn page(opts: &DiffOptions, report: &DiffReport, image: &[Rgb], reference: &[Rgb]) -> String {
+    let name = |p: &Path| p.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned());
+    let (image_name, reference_name) = (name(&opts.image), name(&opts.reference));
+    let table = Table {
+        columns: ["image", "MSE", "relMSE"].map(String::from).to_vec(),
+        rows: vec![vec![image_name.clone(), num(report.metrics.mse), num(report.metrics.rel_mse)]],
+    };
+    html::page(&Page {
+        title: format!("myriad diff: {image_name} against {reference_name}"),
+        size: report.size,
+        images: vec![
+            PageImage { name: reference_name, caption: "reference".into(), pixels: reference },
+            PageImage { name: image_name, caption: String::new(), pixels: image },
+        ],
+        table,
+        plot_svg: None,
+        facts: vec![
+            ("image".into(), opts.image.display().to_string()),
+            ("reference".into(), opts.reference.display().to_string()),
+            ("myriad".into(), format!("{} ({})", env!("CARGO_PKG_VERSION"), env!("MYRIAD_GIT_REVISION"))),
+        ],
+        exposure: 0.0,
+    })
 }
 
 impl fmt::Display for DiffReport {

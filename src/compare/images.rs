@@ -24,7 +24,7 @@ pub struct Picture {
 }
 
 /// The "inferno"-like ramp: black → purple → orange → pale yellow, perceptually ordered.
-const RAMP: [[f32; 3]; 6] = [
+pub const RAMP: [[f32; 3]; 6] = [
     [0.001, 0.000, 0.014],
     [0.258, 0.039, 0.406],
     [0.578, 0.148, 0.404],

@@ -129,6 +129,15 @@ pub struct CompareReport {
     pub files: Vec<String>,
 }
 
+/// A table: a header row, then rows of cells as shown (numbers first, so they sort as numbers).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Table {
+    /// Column titles.
+    pub columns: Vec<String>,
+    /// Each row's cells.
+    pub rows: Vec<Vec<String>>,
+}
+
 /// Formats a number with 4 significant digits (scientific below 1e-3).
 pub fn num(x: f64) -> String {
     if x.is_nan() {
@@ -151,30 +160,50 @@ fn pm(s: &Stat, seeds: usize) -> String {
 }
 
 impl CompareReport {
+    /// The metrics, a row per sampler: what `table` prints and the HTML page sorts.
+    pub fn metrics(&self) -> Table {
+        let seeds = self.samplers.first().map_or(1, |s| s.runs.len());
+        let columns = [
+            "sampler",
+            "spp",
+            "time (s)",
+            "MSE",
+            "relMSE",
+            "efficiency",
+            "vs best",
+            "build (s)",
+            "memory (B)",
+            "bias z",
+        ];
+        let rows = self
+            .samplers
+            .iter()
+            .map(|s| {
+                vec![
+                    s.sampler.clone(),
+                    pm(&s.spp, seeds),
+                    pm(&s.seconds, seeds),
+                    pm(&s.mse, seeds),
+                    pm(&s.rel_mse, seeds),
+                    pm(&s.efficiency, seeds),
+                    num(s.efficiency_vs_best),
+                    num(s.build_seconds),
+                    s.memory_bytes.to_string(),
+                    format!("{}{}", num(s.bias.z), if s.bias.flagged { " **biased?**" } else { "" }),
+                ]
+            })
+            .collect();
+        Table { columns: columns.map(String::from).to_vec(), rows }
+    }
+
     /// The results table in Markdown (also what the terminal shows).
     pub fn table(&self) -> String {
-        let seeds = self.samplers.first().map_or(1, |s| s.runs.len());
-        let mut t = String::from(
-            "| sampler | spp | time (s) | MSE | relMSE | efficiency | vs best | build (s) | memory (B) | bias z |\n\
-             |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
-        );
-        for s in &self.samplers {
-            t += &format!(
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {}{} |\n",
-                s.sampler,
-                pm(&s.spp, seeds),
-                pm(&s.seconds, seeds),
-                pm(&s.mse, seeds),
-                pm(&s.rel_mse, seeds),
-                pm(&s.efficiency, seeds),
-                num(s.efficiency_vs_best),
-                num(s.build_seconds),
-                s.memory_bytes,
-                num(s.bias.z),
-                if s.bias.flagged { " **biased?**" } else { "" }
-            );
+        let t = self.metrics();
+        let mut md = format!("| {} |\n|---|{}\n", t.columns.join(" | "), "---:|".repeat(t.columns.len() - 1));
+        for row in &t.rows {
+            md += &format!("| {} |\n", row.join(" | "));
         }
-        t
+        md
     }
 
     /// `report.md`: settings, the table, the contact sheet and the plot.

@@ -1,7 +1,7 @@
 //! `myriad compare` and `myriad diff` as users run them.
 
 use myriad::commands::compare::{CompareOptions, compare};
-use myriad::commands::diff::diff;
+use myriad::commands::diff::{DiffOptions, diff};
 use myriad::commands::settings::RenderRequest;
 use myriad::math::UVec2;
 use myriad::render::Budget;
@@ -66,6 +66,7 @@ fn compare_writes_every_output_and_the_reports_agree() {
         "convergence.svg",
         "report.md",
         "report.json",
+        "report.html",
     ] {
         let len = std::fs::metadata(dir.path().join(f)).map(|m| m.len()).unwrap_or(0);
         assert!(len > 0, "{f} missing or empty");
@@ -149,15 +150,24 @@ fn diff_measures_and_refuses_mismatched_images() {
     compare(&options(dir.path(), vec![LightSamplerKind::Power], Budget::Spp(2))).unwrap();
     let (a, r) = (dir.path().join("power.exr"), dir.path().join("reference.exr"));
     let png = dir.path().join("err.png");
-    let d = diff(&a, &r, Some(&png)).unwrap();
+    let html = dir.path().join("diff.html");
+    let ask = |image: &Path, error_png: Option<&Path>, html: Option<&Path>| DiffOptions {
+        image: image.into(),
+        reference: r.clone(),
+        error_png: error_png.map(Into::into),
+        html: html.map(Into::into),
+    };
+    let d = diff(&ask(&a, Some(&png), Some(&html))).unwrap();
     assert!(d.metrics.rel_mse > 0.0 && png.exists());
-    assert_eq!(diff(&a, &a, None).unwrap().metrics.rel_mse, 0.0);
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert!(page.contains("myriad diff: power.exr against reference.exr") && page.contains("myriad-data"));
+    assert_eq!(diff(&DiffOptions { reference: a.clone(), ..ask(&a, None, None) }).unwrap().metrics.rel_mse, 0.0);
     // A smaller image is a clear error naming both sizes.
     let mut small = options(dir.path(), vec![LightSamplerKind::Power], Budget::Spp(1));
     small.resolution = Some(UVec2::new(20, 15));
     small.out_dir = dir.path().join("small");
     compare(&small).unwrap();
-    let e = diff(&dir.path().join("small/power.exr"), &r, None).err().unwrap().to_string();
+    let e = diff(&ask(&dir.path().join("small/power.exr"), None, None)).err().unwrap().to_string();
     assert!(e.contains("20 × 15") && e.contains("40 × 30"), "{e}");
 }
 

@@ -11,6 +11,7 @@ mod formats;
 mod light_samplers;
 mod mutation;
 mod render;
+mod report_page;
 mod scene_loading;
 mod slurm;
 mod split;
