@@ -50,7 +50,8 @@ enum Command {
     /// Every sampler renders with the same seeds (equal spp: identical camera rays and BSDF
     /// directions, so differences come from the light choice alone), or for the same time.
     /// Writes each render, a false-colour error map, a labelled contact sheet, a plot of relMSE
-    /// against time (SVG), report.md and report.json to the output folder, and prints the table.
+    /// against time (SVG), report.md, report.json and report.html (a page to flip, zoom and
+    /// read the images) to the output folder, and prints the table.
     Compare(CompareArgs),
     /// MSE and relMSE of IMAGE against REFERENCE (EXR files of the same size).
     Diff {
@@ -550,7 +551,7 @@ fn compare(a: CompareArgs) -> myriad::Result<()> {
         ));
     }
     say(format!(
-        "wrote {} (report.md, report.json, contact-sheet.png, convergence.svg, per-sampler EXR and error maps)",
+        "wrote {} (report.html to look at, report.md, report.json, contact-sheet.png, convergence.svg, per-sampler EXR and error maps)",
         out_dir.display()
     ));
     Ok(())

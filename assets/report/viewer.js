@@ -1,9 +1,12 @@
 // myriad's comparison viewer: plain JavaScript, no dependencies, no network.
-// The data (see src/compare/html.rs) is in <script id="myriad-data">: every image as
-// zlib-compressed half-float byte planes, the error map's ramp, the metrics and the facts.
+// The data (see src/compare/html.rs): <script id="myriad-data"> holds the names, the error
+// map's ramp, the metrics and the facts; <script data-image="k"> pieces hold image k as
+// zlib-compressed half-float byte planes, in base64.
 "use strict";
 (async function () {
+  const t0 = performance.now();
   const data = JSON.parse(document.getElementById("myriad-data").textContent);
+  const t1 = performance.now();
   const W = data.width, H = data.height, N = W * H;
   const canvas = document.getElementById("canvas");
   const view = document.getElementById("view");
@@ -17,20 +20,19 @@
     const s = h & 0x8000 ? -1 : 1, e = (h >> 10) & 31, m = h & 1023;
     HALF[h] = e === 0 ? s * m * Math.pow(2, -24) : e === 31 ? (m ? NaN : s * Infinity) : s * (1 + m / 1024) * Math.pow(2, e - 15);
   }
-  async function decode(b64) {
-    const bin = atob(b64);
-    const bytes = new Uint8Array(bin.length);
-    for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
-    const stream = new Blob([bytes]).stream().pipeThrough(new DecompressionStream("deflate"));
-    const planes = new Uint8Array(await new Response(stream).arrayBuffer());
-    const rgb = new Float32Array(3 * N);
-    for (let c = 0; c < 3; c++) {
-      const hi = c * N, lo = (3 + c) * N;
-      for (let i = 0; i < N; i++) rgb[3 * i + c] = HALF[(planes[hi + i] << 8) | planes[lo + i]];
-    }
-    return rgb;
+  // An image's byte planes (see src/compare/html.rs), from its <script data-image> pieces,
+  // decoded and inflated by the browser itself.
+  async function decode(k) {
+    const pieces = document.querySelectorAll(`script[data-image="${k}"]`);
+    const b64 = Array.from(pieces, (p) => p.textContent).join("");
+    const response = await fetch("data:application/octet-stream;base64," + b64);
+    const stream = response.body.pipeThrough(new DecompressionStream("deflate"));
+    return new Uint8Array(await new Response(stream).arrayBuffer());
   }
-  const images = await Promise.all(data.images.map(async (im) => ({ name: im.name, caption: im.caption, rgb: await decode(im.half) })));
+  const images = await Promise.all(data.images.map(async (im, k) => ({ name: im.name, caption: im.caption, planes: await decode(k) })));
+  // Channel c of pixel i of an image.
+  const value = (im, i, c) => HALF[(im.planes[c * N + i] << 8) | im.planes[(3 + c) * N + i]];
+  const t2 = performance.now();
 
   // What is shown: which image, how, and where.
   const state = { index: 0, mode: "render", exposure: data.exposure, scale: 1, x: 0, y: 0 };
@@ -51,26 +53,25 @@
   }
   const pixels = ctx.createImageData(W, H);
   function paint() {
-    const a = images[state.index].rgb, ref = images[0].rgb, out = pixels.data;
+    const a = images[state.index], ref = images[0], out = pixels.data;
     const k = Math.pow(2, state.exposure), [lo, hi] = data.decades;
     for (let i = 0; i < N; i++) {
-      let r, g, b;
-      if (state.mode === "render") {
-        r = srgb8(a[3 * i] * k); g = srgb8(a[3 * i + 1] * k); b = srgb8(a[3 * i + 2] * k);
-      } else if (state.mode === "diff") {
-        r = srgb8(Math.abs(a[3 * i] - ref[3 * i]) * k);
-        g = srgb8(Math.abs(a[3 * i + 1] - ref[3 * i + 1]) * k);
-        b = srgb8(Math.abs(a[3 * i + 2] - ref[3 * i + 2]) * k);
-      } else {
+      if (state.mode === "error") {
         let e = 0;
         for (let c = 0; c < 3; c++) {
-          const x = a[3 * i + c], y = ref[3 * i + c];
+          const x = value(a, i, c), y = value(ref, i, c);
           e += ((x - y) * (x - y)) / (y * y + data.epsilon);
         }
         e = Math.sqrt(e / 3);
-        [r, g, b] = ramp(e > 0 ? (Math.log10(e) - lo) / (hi - lo) : 0);
+        const [r, g, b] = ramp(e > 0 ? (Math.log10(e) - lo) / (hi - lo) : 0);
+        out[4 * i] = r; out[4 * i + 1] = g; out[4 * i + 2] = b;
+      } else {
+        for (let c = 0; c < 3; c++) {
+          const x = value(a, i, c);
+          out[4 * i + c] = srgb8((state.mode === "diff" ? Math.abs(x - value(ref, i, c)) : x) * k);
+        }
       }
-      out[4 * i] = r; out[4 * i + 1] = g; out[4 * i + 2] = b; out[4 * i + 3] = 255;
+      out[4 * i + 3] = 255;
     }
     ctx.putImageData(pixels, 0, 0);
     place();
@@ -125,7 +126,7 @@
       const line = document.createElement("span");
       line.className = k === state.index ? "on" : "";
       line.dataset.name = im.name;
-      line.textContent = im.name.padEnd(12) + fmt(im.rgb[3 * i]) + fmt(im.rgb[3 * i + 1]) + fmt(im.rgb[3 * i + 2]) + "\n";
+      line.textContent = im.name.padEnd(12) + [0, 1, 2].map((c) => fmt(value(im, i, c))).join("") + "\n";
       readoutEl.appendChild(line);
     });
   }
@@ -210,5 +211,7 @@
   facts.appendChild(dl);
 
   paint();
+  const t3 = performance.now();
+  window.myriadTimes = [t0, t1 - t0, t2 - t1, t3 - t2];
   window.myriadReady = true;
 })().catch((e) => { console.error("myriad viewer: " + e); document.body.prepend("The viewer failed: " + e); });

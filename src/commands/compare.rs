@@ -314,7 +314,8 @@ fn relative_noise(variance: &[Rgb], image: &[Rgb]) -> f64 {
 /// Measures the reference's own noise against the least noisy run's (both over that run's
 /// image, so a noisy reference does not judge itself): flagged beyond [`NOISY_REFERENCE`].
 fn judge_reference(info: &mut ReferenceInfo, variance: &[Rgb], image: &[Rgb], run_noise: f64) {
-    if variance.iter().all(|v| *v == Rgb::ZERO) {
+    // Either side without a variance estimate (one sample per pixel) cannot be judged.
+    if variance.iter().all(|v| *v == Rgb::ZERO) || !(run_noise > 0.0) {
         return;
     }
     let noise = relative_noise(variance, image);

@@ -114,8 +114,9 @@ pub fn bias_check(
         var += w * w * sd * sd;
     }
     let mean_difference = sum_r / mean.len().max(1) as f64;
-    if !(var > 0.0) {
-        // No variance estimate (one sample of each pixel): nothing to test against.
+    // Without the runs' own variance (one sample of each pixel in all) the reference's alone
+    // would make any run's noise look like bias: nothing to test against.
+    if !(var > 0.0) || mean_variance.iter().all(|v| *v == Rgb::ZERO) {
         return BiasCheck { mean_difference, z: f64::NAN, p: f64::NAN, flagged: false };
     }
     let z = sum_w / var.sqrt();
@@ -152,6 +153,10 @@ mod tests {
         let shifted: Vec<Rgb> = img.iter().map(|x| *x + Rgb::splat(0.1)).collect();
         let b = bias_check(&shifted, &zero, &img, &zero, 0.001);
         assert!(!b.flagged && b.z.is_nan() && (b.mean_difference - 0.1).abs() < 1e-6);
+        // Nor with the reference's variance alone (runs of one sample per pixel): the runs'
+        // own noise would read as bias.
+        let b = bias_check(&shifted, &zero, &img, &vec![Rgb::splat(1e-6); 100], 0.001);
+        assert!(!b.flagged && b.z.is_nan());
         assert!(error_metrics(&img, &img[..50]).is_err());
     }
 

@@ -213,5 +213,47 @@ fn the_report_page_shows_the_renders_flips_on_a_key_and_reads_pixel_values() {
             exr[c]
         );
     }
+    // The table sorts by a column on a click on its header, and back the other way.
+    let column = |b: &mut Browser| -> Vec<f64> {
+        let cells =
+            b.eval("Array.from(document.querySelectorAll('#metrics tr'), r => r.cells[4].textContent).slice(1)");
+        cells
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| c.as_str().unwrap().split(' ').next().unwrap().parse().unwrap())
+            .collect()
+    };
+    browser.eval("document.querySelectorAll('#metrics th')[4].click(), true");
+    let up = column(&mut browser);
+    browser.eval("document.querySelectorAll('#metrics th')[4].click(), true");
+    let down = column(&mut browser);
+    assert!(up.len() == 2 && up[0] <= up[1] && down[0] >= down[1], "{up:?} {down:?}");
+    assert!(browser.eval("document.querySelector('#plot svg') !== null") == json!(true), "the convergence plot");
     assert!(browser.errors().is_empty(), "console errors: {:?}", browser.errors());
+}
+
+/// How long a page takes to open, for the README: `MYRIAD_REPORT_PAGE=path/report.html cargo
+/// test --release --test it report_page_open_time -- --ignored --nocapture` (navigation to
+/// ready: every image inflated and the first one drawn).
+#[test]
+#[ignore]
+fn report_page_open_time() {
+    let (Some(exe), Ok(page)) = (chromium(), std::env::var("MYRIAD_REPORT_PAGE")) else { return };
+    let page = std::fs::canonicalize(page).unwrap();
+    let mut browser = Browser::launch(&exe);
+    for run in 0..3 {
+        let start = Instant::now();
+        browser.call("Page.navigate", json!({ "url": format!("file://{}", page.display()) }));
+        while browser.eval("window.myriadReady === true") != json!(true) {
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        let mb = std::fs::metadata(&page).unwrap().len() as f64 / 1e6;
+        let times = browser.eval("window.myriadTimes");
+        eprintln!(
+            "run {run}: {mb:.1} MB ready in {:.2} s {times}, errors {:?}",
+            start.elapsed().as_secs_f64(),
+            browser.errors()
+        );
+    }
 }
