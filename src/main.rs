@@ -307,11 +307,11 @@ struct CompareArgs {
 /// `render` block, then the defaults.
 #[derive(Args)]
 struct CommonArgs {
-    /// Samples per pixel [default: 64; compare: 16 for every sampler].
+    /// Samples per pixel [default: 64; compare: 16 for every sampler; view: no limit].
     #[arg(long, conflicts_with = "time")]
     spp: Option<u32>,
     /// Render for this many seconds (whole passes) instead of a fixed spp (compare: every
-    /// sampler, per seed).
+    /// sampler, per seed; view: stop refining after this long).
     #[arg(long, value_parser = parse_seconds)]
     time: Option<Duration>,
     /// Random seed: the same seed gives the same image, whatever --threads is (compare: the
@@ -331,10 +331,10 @@ struct CommonArgs {
     /// from the front (for OBJ files, which carry no camera).
     #[arg(long)]
     camera: Option<String>,
-    /// Exposure of the PNG previews, in stops.
+    /// Exposure of the PNG previews, in stops (view: the starting exposure).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_exposure)]
     exposure: f32,
-    /// Hide the progress bars.
+    /// Hide the progress bars (view: the lines on stderr).
     #[arg(long, short)]
     quiet: bool,
     #[command(flatten)]
