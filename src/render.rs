@@ -8,6 +8,7 @@
 //! `a..b` merges exactly with one of `b..c`. An equal-time render runs passes until its
 //! budget is spent.
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
@@ -193,6 +194,8 @@ pub struct RenderOutput {
 
 /// What one pass reports besides the samples it adds to the film.
 struct PassTally {
+    /// Whether the pass was called off half-way (its samples are then incomplete).
+    cancelled: bool,
     rays: RayCounters,
     non_finite: u64,
     /// Per band, in image order, what its light samples saw (when the strategy learns).
@@ -200,7 +203,8 @@ struct PassTally {
 }
 
 /// Adds samples `first..first+count` of every pixel to `film`; with `learning`, keeps what
-/// the light samples saw for the strategy to learn from.
+/// the light samples saw for the strategy to learn from. Setting `cancel` calls the pass off
+/// at the next pixel (the film is then incomplete).
 #[allow(clippy::too_many_arguments)]
 fn render_pass(
     scene: &Scene,
@@ -211,7 +215,9 @@ fn render_pass(
     count: u32,
     learning: bool,
     progress: Option<&dyn RenderObserver>,
+    cancel: Option<&AtomicBool>,
 ) -> PassTally {
+    let called_off = || cancel.is_some_and(|c| c.load(Ordering::Relaxed));
     let size = settings.resolution;
     let bands: Vec<_> = film.bands_mut(ROWS_PER_BAND).collect();
     let results: Vec<(Tally, u64)> = bands
@@ -223,6 +229,9 @@ fn render_pass(
                 return (tally, bad);
             }
             for (k, px) in pixels.iter_mut().enumerate() {
+                if called_off() {
+                    break;
+                }
                 let index = row0 as usize * size.x as usize + k;
                 let pixel = UVec2::new(index as u32 % size.x, index as u32 / size.x);
                 for s in first..first + count {
@@ -247,7 +256,7 @@ fn render_pass(
         })
         .collect();
     film.add_spp(count);
-    let mut pass = PassTally { rays: RayCounters::default(), non_finite: 0, seen: Vec::new() };
+    let mut pass = PassTally { cancelled: called_off(), rays: RayCounters::default(), non_finite: 0, seen: Vec::new() };
     for (tally, bad) in results {
         pass.rays.add(&tally.rays);
         pass.non_finite += bad;
@@ -317,7 +326,7 @@ impl Learner {
         while film.spp() < end {
             let first = film.spp();
             let count = ((first + 1).next_power_of_two() - first).min(end - first);
-            let pass = render_pass(scene, &self.strategy, settings, &mut film, first, count, true, None);
+            let pass = render_pass(scene, &self.strategy, settings, &mut film, first, count, true, None, None);
             rays.add(&pass.rays);
             self.after_pass(pass.seen, first + count);
         }
@@ -361,17 +370,32 @@ impl<'a> Progressive<'a> {
     /// Adds the next `count` samples of every pixel (fewer when the strategy must learn
     /// first), telling `progress` as bands finish; returns how many it added.
     pub fn pass(&mut self, count: u32, progress: Option<&dyn RenderObserver>) -> u32 {
+        self.pass_unless(count, progress, None).expect("a pass without a cancel flag runs to its end")
+    }
+
+    /// [`pass`](Self::pass), called off as soon as `cancel` is set (a viewer whose view
+    /// changed): then `None`, and this render's film is incomplete, to be dropped.
+    pub fn pass_unless(
+        &mut self,
+        count: u32,
+        progress: Option<&dyn RenderObserver>,
+        cancel: Option<&AtomicBool>,
+    ) -> Option<u32> {
         let first = self.offset + self.film.spp();
         let learning = self.learner.as_ref().is_some_and(|l| l.wants(first));
         let count = if learning { count.min((first + 1).next_power_of_two() - first) } else { count };
         let current = self.learner.as_ref().map_or(self.strategy, |l| &l.strategy);
-        let pass = render_pass(self.scene, current, &self.settings, &mut self.film, first, count, learning, progress);
+        let pass =
+            render_pass(self.scene, current, &self.settings, &mut self.film, first, count, learning, progress, cancel);
+        if pass.cancelled {
+            return None;
+        }
         self.rays.add(&pass.rays);
         self.non_finite += pass.non_finite;
         if let Some(l) = self.learner.as_mut().filter(|_| learning) {
             l.after_pass(pass.seen, first + count);
         }
-        count
+        Some(count)
     }
 
     /// Every sample so far.

@@ -291,6 +291,30 @@ fn pass_boundaries_do_not_change_pixels() {
 }
 
 #[test]
+fn a_progressive_render_in_passes_of_its_own_is_the_render_and_a_called_off_pass_says_so() {
+    // The viewer drives `Progressive` itself (passes of 3, then 5) and calls passes off when
+    // its view changes: the image at 8 spp is `render`'s, and a called-off pass is None.
+    let resolution = UVec2::new(8, 6);
+    let scene = load_scene(None, &BuildOptions { resolution: Some(resolution), camera: None }.into()).unwrap().scene;
+    let strategy = LightStrategy::build(LightSamplerKind::Learned, &scene.lights, scene.radius);
+    let settings =
+        RenderSettings { budget: Budget::Spp(8), seed: 4, max_depth: 3, resolution, aovs: Default::default() };
+    let mut progressive = myriad::render::Progressive::new(&scene, &strategy, &settings);
+    let go_on = std::sync::atomic::AtomicBool::new(false);
+    let mut spp = 0;
+    while spp < 8 {
+        spp += progressive.pass_unless(if spp == 0 { 3 } else { 5 }, None, Some(&go_on)).unwrap();
+    }
+    let whole = render(&scene, &strategy, &settings, &mut ()).film;
+    for i in 0..48 {
+        assert_eq!(progressive.film().mean(i), whole.mean(i), "pixel {i}");
+    }
+    let stop = std::sync::atomic::AtomicBool::new(true);
+    let mut called_off = myriad::render::Progressive::new(&scene, &strategy, &settings);
+    assert_eq!(called_off.pass_unless(4, None, Some(&stop)), None);
+}
+
+#[test]
 fn the_image_size_is_a_render_setting_not_part_of_the_scene() {
     // A scene built for 8 × 6 renders at 16 × 12 exactly as one built for 16 × 12 does.
     let built = |w, h| {

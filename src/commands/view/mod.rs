@@ -4,9 +4,9 @@
 //!
 //! Owns: the window (minifb: X11 through Xlib loaded at run time, 7 crates and 8 s to build,
 //! against winit + softbuffer's 98 crates and 86 s) and its event loop. The render runs on a
-//! thread of its own ([`worker`]) in 1-spp passes at first, then ~0.1 s ones, so the first
-//! image comes at once and a restart waits a pass at most; the image at N spp is the one
-//! `myriad render --spp N` makes with the same seed, bit for bit. Closing the window, Esc,
+//! thread of its own ([`worker`]): a half-size preview first, then ever longer passes, so the
+//! first image comes at once; a new view calls off the pass under way at the next pixel. The
+//! image at N spp is the one `myriad render --spp N` makes with the same seed, bit for bit. Closing the window, Esc,
 //! Ctrl-C or SIGTERM end the view; a saved image is written whole or not at all.
 
 mod controls;
@@ -17,6 +17,7 @@ use std::collections::VecDeque;
 use std::fmt;
 use std::io::Write;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender};
 use std::time::{Duration, Instant};
 
@@ -129,14 +130,16 @@ pub fn view(opts: &ViewOptions) -> Result<ViewReport> {
     let scene = &mut loaded.scene;
     let navigation = Navigation::new(scene.camera, scene.center, scene.radius, size.y);
     let _busy = interrupt::busy();
+    let cancel = AtomicBool::new(false);
     let (orders, their_orders) = mpsc::channel();
     let (their_reports, reports) = mpsc::channel();
-    let mut ui = Ui::new(opts, size, resolved.sampler, navigation, reference, built);
+    let mut ui = Ui::new(opts, size, resolved.sampler, navigation, reference, built, &cancel);
     // The first pass renders while the window opens.
     std::thread::scope(|s| {
-        s.spawn(|| worker::run(scene, &plan, their_orders, their_reports));
+        s.spawn(|| worker::run(scene, &plan, &cancel, their_orders, their_reports));
         ui.restart(&orders);
         let result = open_window(&title, size).and_then(|window| ui.run(window, &orders, &reports));
+        cancel.store(true, Ordering::Relaxed);
         let _ = orders.send(Order::Quit);
         result
     })?;
@@ -218,6 +221,8 @@ struct Ui<'a> {
     built: Instant,
     announced_done: bool,
     report: ViewReport,
+    /// Set before a new view is sent: the render thread calls off the pass under way.
+    cancel: &'a AtomicBool,
 }
 
 impl<'a> Ui<'a> {
@@ -228,6 +233,7 @@ impl<'a> Ui<'a> {
         navigation: Navigation,
         reference: Option<(PathBuf, Vec<Rgb>)>,
         built: Instant,
+        cancel: &'a AtomicBool,
     ) -> Self {
         let message = match &reference {
             Some((path, _)) => format!("reference {}", path.display()),
@@ -249,6 +255,7 @@ impl<'a> Ui<'a> {
             built,
             announced_done: false,
             report: ViewReport::default(),
+            cancel,
         }
     }
 
@@ -347,6 +354,7 @@ impl<'a> Ui<'a> {
         self.report.views += 1;
         self.arrivals.clear();
         self.announced_done = false;
+        self.cancel.store(true, Ordering::Relaxed);
         let _ =
             orders.send(Order::Show(View { generation: self.generation, sampler: self.sampler, camera: self.camera }));
     }

@@ -8,6 +8,7 @@
 
 use std::collections::HashMap;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, Sender, TryRecvError};
 use std::time::{Duration, Instant};
 
@@ -89,8 +90,16 @@ pub struct Accumulate {
 }
 
 /// Runs views until told to quit (or the user stops the process): renders `scene` (whose
-/// camera it moves), building each sampler the first time it is asked for.
-pub fn run(scene: &mut Scene, plan: &Accumulate, orders: Receiver<Order>, reports: Sender<Report>) {
+/// camera it moves), building each sampler the first time it is asked for. The window sets
+/// `cancel` before it sends a new view or quits: the pass under way stops at the next pixel
+/// (an `all` pass over thousands of lights takes seconds).
+pub fn run(
+    scene: &mut Scene,
+    plan: &Accumulate,
+    cancel: &AtomicBool,
+    orders: Receiver<Order>,
+    reports: Sender<Report>,
+) {
     let mut strategies: HashMap<LightSamplerKind, LightStrategy> = HashMap::new();
     let Ok(Order::Show(mut view)) = orders.recv() else { return };
     loop {
@@ -98,34 +107,45 @@ pub fn run(scene: &mut Scene, plan: &Accumulate, orders: Receiver<Order>, report
         let strategy = strategies
             .entry(view.sampler)
             .or_insert_with(|| LightStrategy::build(view.sampler, &scene.lights, scene.radius));
-        match accumulate(scene, strategy, view, plan, &orders, &reports) {
+        cancel.store(false, Ordering::Relaxed);
+        match accumulate(scene, strategy, view, plan, cancel, &orders, &reports) {
             Some(next) => view = next,
             None => return,
         }
     }
 }
 
-/// Refines one view until it is done, then waits; returns the next view, or `None` to quit.
+/// Refines one view until it is done (or called off), then waits; returns the next view, or
+/// `None` to quit.
 fn accumulate(
     scene: &Scene,
     strategy: &LightStrategy,
     view: View,
     plan: &Accumulate,
+    cancel: &AtomicBool,
     orders: &Receiver<Order>,
     reports: &Sender<Report>,
 ) -> Option<View> {
     let settings = RenderSettings { budget: Budget::Spp(plan.spp), ..plan.settings };
     let size = settings.resolution;
-    if size.x * size.y >= PREVIEW_PIXELS
-        && reports.send(Report::Frame(preview(scene, strategy, view, &settings))).is_err()
-    {
-        return None;
+    // Called off: a new view or the end is on its way; wait for it.
+    let mut called_off = false;
+    if size.x * size.y >= PREVIEW_PIXELS {
+        match preview(scene, strategy, view, &settings, cancel) {
+            Some(frame) => {
+                if reports.send(Report::Frame(frame)).is_err() {
+                    return None;
+                }
+            }
+            None => called_off = true,
+        }
     }
     let mut progressive = Progressive::new(scene, strategy, &settings);
     let start = Instant::now();
     let mut count = 1;
     loop {
-        let done = progressive.film().spp() >= plan.spp || plan.time.is_some_and(|t| start.elapsed() >= t);
+        let done =
+            called_off || progressive.film().spp() >= plan.spp || plan.time.is_some_and(|t| start.elapsed() >= t);
         // Every order waiting, the last view winning; when done, wait for one.
         let mut next = None;
         loop {
@@ -150,7 +170,12 @@ fn accumulate(
             return None;
         }
         let t0 = Instant::now();
-        let rendered = progressive.pass(count.min(plan.spp - progressive.film().spp()), None);
+        let Some(rendered) =
+            progressive.pass_unless(count.min(plan.spp - progressive.film().spp()), None, Some(cancel))
+        else {
+            called_off = true;
+            continue;
+        };
         let per_spp = t0.elapsed().as_secs_f64() / rendered as f64;
         let elapsed = start.elapsed();
         let target = (elapsed / 2).clamp(MIN_PASS, MAX_PASS);
@@ -170,18 +195,32 @@ fn accumulate(
     }
 }
 
-/// One sample per pixel at half the width and height, each pixel shown as 2 × 2.
-fn preview(scene: &Scene, strategy: &LightStrategy, view: View, settings: &RenderSettings) -> Frame {
+/// One sample per pixel at half the width and height, each pixel shown as 2 × 2; `None` when
+/// called off.
+fn preview(
+    scene: &Scene,
+    strategy: &LightStrategy,
+    view: View,
+    settings: &RenderSettings,
+    cancel: &AtomicBool,
+) -> Option<Frame> {
     let full = settings.resolution;
     let half = UVec2::new(full.x.div_ceil(2), full.y.div_ceil(2));
     let mut small = Progressive::new(scene, strategy, &RenderSettings { resolution: half, ..*settings });
-    small.pass(1, None);
+    small.pass_unless(1, None, Some(cancel))?;
     let means = small.film().means();
     let pixels = (0..full.y)
         .flat_map(|y| (0..full.x).map(move |x| (y / 2 * half.x + x / 2) as usize))
         .map(|i| means[i])
         .collect();
-    Frame { generation: view.generation, sampler: view.sampler, pixels, spp: 0, samples_per_second: 0.0, done: false }
+    Some(Frame {
+        generation: view.generation,
+        sampler: view.sampler,
+        pixels,
+        spp: 0,
+        samples_per_second: 0.0,
+        done: false,
+    })
 }
 
 /// Writes the view's image so far into `dir` as `view-SAMPLER-Nspp.exr`, with its provenance.
