@@ -686,7 +686,8 @@ fn rank(results: &mut [SamplerResult]) {
     }
 }
 
-fn file_name(p: &Path) -> String {
+/// The last component of `p`, for titles and captions.
+pub(crate) fn file_name(p: &Path) -> String {
     p.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned())
 }
 
@@ -715,7 +716,6 @@ fn html_page(
         ("threads", report.threads.to_string()),
         ("seeds", seeds.join(", ")),
         ("reference", format!("{} ({})", report.reference.path, report.reference.origin)),
-        ("myriad", format!("{} ({})", env!("CARGO_PKG_VERSION"), env!("MYRIAD_GIT_REVISION"))),
     ];
     html::page(&Page {
         title: format!("myriad compare: {} ({})", file_name(&opts.scene), report.mode),

@@ -3,6 +3,7 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use super::compare::file_name;
 use crate::compare::html::{self, Page, PageImage};
 use crate::compare::images::error_picture;
 use crate::compare::metrics::{ErrorMetrics, error_metrics, relative_error_map};
@@ -71,8 +72,7 @@ pub fn diff(opts: &DiffOptions) -> Result<DiffReport> {
 
 /// The two images on compare's HTML page: the reference first, the metrics, both paths.
 fn page(opts: &DiffOptions, report: &DiffReport, image: &[Rgb], reference: &[Rgb]) -> String {
-    let name = |p: &Path| p.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned());
-    let (image_name, reference_name) = (name(&opts.image), name(&opts.reference));
+    let (image_name, reference_name) = (file_name(&opts.image), file_name(&opts.reference));
     let table = Table {
         columns: ["image", "MSE", "relMSE"].map(String::from).to_vec(),
         rows: vec![vec![image_name.clone(), num(report.metrics.mse), num(report.metrics.rel_mse)]],
@@ -89,7 +89,6 @@ fn page(opts: &DiffOptions, report: &DiffReport, image: &[Rgb], reference: &[Rgb
         facts: vec![
             ("image".into(), opts.image.display().to_string()),
             ("reference".into(), opts.reference.display().to_string()),
-            ("myriad".into(), format!("{} ({})", env!("CARGO_PKG_VERSION"), env!("MYRIAD_GIT_REVISION"))),
         ],
         exposure: 0.0,
     })

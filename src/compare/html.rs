@@ -45,7 +45,7 @@ pub struct Page<'a> {
     pub table: Table,
     /// The convergence plot, as SVG, if there is one.
     pub plot_svg: Option<String>,
-    /// Settings, scene, seeds, revision: (name, value).
+    /// Settings, scene, seeds: (name, value); the page adds the myriad version and revision.
     pub facts: Vec<(String, String)>,
     /// Starting exposure in stops.
     pub exposure: f32,
@@ -104,6 +104,8 @@ pub fn page(page: &Page) -> String {
             pixels += &format!("<script type=\"application/octet-stream\" data-image=\"{k}\">{piece}</script>\n");
         }
     }
+    let mut facts = page.facts.clone();
+    facts.push(("myriad".into(), format!("{} ({})", env!("CARGO_PKG_VERSION"), env!("MYRIAD_GIT_REVISION"))));
     let data = Data {
         title: &page.title,
         width: page.size.x,
@@ -114,7 +116,7 @@ pub fn page(page: &Page) -> String {
         epsilon: REL_MSE_EPSILON,
         images,
         table: &page.table,
-        facts: &page.facts,
+        facts: &facts,
     };
     // JSON inside <script> may not contain "</": escape every '<'.
     let json = serde_json::to_string(&data).expect("plain data serialises").replace('<', "\\u003c");

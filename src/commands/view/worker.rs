@@ -3,8 +3,8 @@
 //! A view starts with a 1-spp preview at half the width and height (a quarter of the work,
 //! so the first image comes at once), then passes of half the time accumulated so far, from
 //! [`MIN_PASS`] to [`MAX_PASS`]: frequent images while they change most, few enough that
-//! copying and drawing them costs ~3 % (`tools/view_bench.py`); a restart waits
-//! [`MAX_PASS`] at most.
+//! copying and drawing them costs 1–2 % (`tools/view_bench.py`). A new view calls the pass
+//! under way off at the next pixel.
 
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -17,7 +17,7 @@ use crate::film::AovSet;
 use crate::interrupt::{self, Stop};
 use crate::light_sampler::LightStrategy;
 use crate::math::{Rgb, UVec2};
-use crate::render::{Budget, Progressive, RenderSettings};
+use crate::render::{Progressive, RenderSettings};
 use crate::scene::Scene;
 use crate::settings::LightSamplerKind;
 
@@ -79,7 +79,7 @@ pub enum Report {
 /// What a view accumulates and for how long.
 #[derive(Clone, Debug)]
 pub struct Accumulate {
-    /// Seed, depth, size (the budget is not used: see `spp` and `time`).
+    /// Seed, depth, size, and the budget `Budget::Spp(spp)`.
     pub settings: RenderSettings,
     /// Stop refining at this many samples per pixel.
     pub spp: u32,
@@ -87,6 +87,13 @@ pub struct Accumulate {
     pub time: Option<Duration>,
     /// The scene's name, for the provenance of saved images.
     pub scene_name: String,
+}
+
+impl Accumulate {
+    /// Whether a view with `spp` samples per pixel after `elapsed` has reached its cap.
+    fn finished(&self, spp: u32, elapsed: Duration) -> bool {
+        spp >= self.spp || self.time.is_some_and(|t| elapsed >= t)
+    }
 }
 
 /// Runs views until told to quit (or the user stops the process): renders `scene` (whose
@@ -126,7 +133,7 @@ fn accumulate(
     orders: &Receiver<Order>,
     reports: &Sender<Report>,
 ) -> Option<View> {
-    let settings = RenderSettings { budget: Budget::Spp(plan.spp), ..plan.settings };
+    let settings = plan.settings;
     let size = settings.resolution;
     // Called off: a new view or the end is on its way; wait for it.
     let mut called_off = false;
@@ -144,8 +151,7 @@ fn accumulate(
     let start = Instant::now();
     let mut count = 1;
     loop {
-        let done =
-            called_off || progressive.film().spp() >= plan.spp || plan.time.is_some_and(|t| start.elapsed() >= t);
+        let done = called_off || plan.finished(progressive.film().spp(), start.elapsed());
         // Every order waiting, the last view winning; when done, wait for one.
         let mut next = None;
         loop {
@@ -187,7 +193,7 @@ fn accumulate(
             pixels: film.means(),
             spp: film.spp(),
             samples_per_second: size.x as f64 * size.y as f64 * film.spp() as f64 / elapsed.as_secs_f64().max(1e-9),
-            done: film.spp() >= plan.spp || plan.time.is_some_and(|t| elapsed >= t),
+            done: plan.finished(film.spp(), elapsed),
         };
         if reports.send(Report::Frame(frame)).is_err() {
             return None;
@@ -235,7 +241,7 @@ fn save(
     let film = progressive.film();
     let path = dir.join(format!("view-{sampler}-{}spp.exr", film.spp()));
     let stats = crate::render::RenderStats { spp: film.spp(), elapsed, ..Default::default() };
-    let meta = super::super::render::provenance(&plan.scene_name, sampler, settings, &stats);
+    let meta = crate::commands::render::provenance(&plan.scene_name, sampler, settings, &stats);
     match crate::io::exr::write(&path, &film.layers(AovSet::default()), &meta) {
         Ok(()) => Report::Saved(path),
         Err(e) => Report::Failed(e.to_string()),
