@@ -2,7 +2,7 @@
 //!
 //! For each 4-wide node we choose which binary descendants become its (up to four) children
 //! so that Σ over lights of their depth (the expected number of nodes a sample visits, if
-//! lights were picked uniformly) plus [`NODE_COST`] per node is smallest: a dynamic program
+//! lights were picked uniformly) plus a cost per node ([`node_cost`]) is smallest: a dynamic program
 //! over the cuts of the top three binary levels below each node, computed bottom-up once per
 //! binary node. Minimising the node count alone leaves SAOH's unbalanced subtrees deep (13
 //! levels for the 10⁴ windows of `street.ron` against 10). Every level of 4-wide nodes
@@ -22,10 +22,19 @@ use super::compact::{Node, Quantizer};
 use super::{LEAF, MAX_DEPTH, NONE, WIDTH};
 use crate::light::LightBounds;
 
-/// What a node costs, in light-levels, in the collapse's objective: 16 keeps trees below 60
-/// bytes per light (`street.ron` 57, `instanced_lamps.glb` 58) for
-/// at most one more level of depth.
-const NODE_COST: u64 = 16;
+/// What a node costs, in light-levels, in the collapse's objective, for a tree over `lights`
+/// lights. Large trees pay 16: that keeps them below 70 bytes per light for at most one more
+/// level of depth (with 0, `street.ron`'s 10⁴ lights take 71 B each). Trees of at most
+/// [`FREE_NODES_UP_TO`] lights fit in cache whatever their node count, so there nodes are
+/// free and only depth counts: on `cornell-9x9.ron` (81 lamps) depth 5 → 4 (28 → 31 nodes),
+/// relMSE at 64 spp 0.0064 → 0.0055 (160×120, seeds 1–3, against a 512-spp render) at
+/// the same CPU time; `cornell_grid_7.glb`, `offices.ron` and `cornell-5x5.ron` unchanged.
+fn node_cost(lights: usize) -> u64 {
+    if lights <= FREE_NODES_UP_TO { 0 } else { 16 }
+}
+
+/// The largest tree whose nodes cost nothing in the collapse ([`node_cost`]).
+const FREE_NODES_UP_TO: usize = 4096;
 
 /// Subtrees with more lights than this are collapsed and emitted in parallel.
 const PARALLEL: u32 = 16_384;
@@ -35,6 +44,8 @@ pub struct Collapse<'a> {
     bin: &'a [BinNode],
     items: &'a [Item],
     grid: Quantizer,
+    /// [`node_cost`] of this tree.
+    node_cost: u64,
     /// Smallest objective (light depths + node costs) below each binary node, counted from a
     /// 4-wide node made for it; filled bottom-up before emission.
     cost: Vec<AtomicU64>,
@@ -61,6 +72,7 @@ impl<'a> Collapse<'a> {
             bin,
             items,
             grid,
+            node_cost: node_cost(lights),
             cost: (0..bin.len()).map(|_| AtomicU64::new(0)).collect(),
             trails: (0..lights).map(|_| AtomicU64::new(0)).collect(),
         };
@@ -113,11 +125,11 @@ impl<'a> Collapse<'a> {
             self.fill_costs(b);
         }
         let best = (1..WIDTH).map(|j| self.slot_cost(a, j) + self.slot_cost(b, WIDTH - j)).min().unwrap();
-        self.cost[n as usize].store(node.count as u64 + NODE_COST + best, Relaxed);
+        self.cost[n as usize].store(node.count as u64 + self.node_cost + best, Relaxed);
     }
 
     /// Smallest objective below binary node `n` when it becomes a 4-wide node (each of its
-    /// lights is one level deeper for it, and the node costs [`NODE_COST`]).
+    /// lights is one level deeper for it, and the node costs `node_cost`).
     fn cost(&self, n: u32) -> u64 {
         self.cost[n as usize].load(Relaxed)
     }

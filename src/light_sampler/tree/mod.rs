@@ -412,6 +412,20 @@ mod tests {
     }
 
     #[test]
+    fn a_small_tree_is_as_shallow_as_four_wide_nodes_allow() {
+        // 81 equal lamps in a 9 × 9 ceiling grid (cornell-9x9.ron): 4⁴ ≥ 81 > 4³. Charging
+        // nodes in the collapse, as for large trees, left it 5 levels deep.
+        let lights: Vec<Light> = (0..81)
+            .map(|i| {
+                let e = AreaEmission { radiance: Rgb::ONE, two_sided: false };
+                let p = Vec3A::new((i % 9) as f32 * 0.2, 2.0, (i / 9) as f32 * 0.2);
+                Light::Quad(QuadLight::new(p, Vec3A::X * 0.05, Vec3A::Z * 0.05, e).unwrap())
+            })
+            .collect();
+        assert_eq!(LightTree::new(&lights).stats().depth, 4);
+    }
+
+    #[test]
     fn the_tree_does_not_depend_on_the_thread_count() {
         // Large enough that the build, the collapse and the emission all run in parallel.
         let lights = grid(60_000);
