@@ -360,6 +360,17 @@ mod tests {
             .collect()
     }
 
+    /// `n` equally bright lamps facing down at height 2, `columns` to a row, `spacing` apart.
+    fn equal_lamps(n: usize, columns: usize, spacing: f32) -> Vec<Light> {
+        (0..n)
+            .map(|i| {
+                let e = AreaEmission { radiance: Rgb::ONE, two_sided: false };
+                let p = Vec3A::new((i % columns) as f32 * spacing, 2.0, (i / columns) as f32 * spacing);
+                Light::Quad(QuadLight::new(p, Vec3A::X * 0.05, Vec3A::Z * 0.05, e).unwrap())
+            })
+            .collect()
+    }
+
     #[test]
     fn trails_replay_to_the_sampled_light() {
         let mut lights = grid(3000);
@@ -384,13 +395,7 @@ mod tests {
     fn far_even_lights_are_chosen_uniformly_and_their_cells_still_tile() {
         // Equal lamps seen from far away: the root's children look alike, so the choice is
         // uniform over all of them, and sample, pmf and cells agree as everywhere else.
-        let lights: Vec<Light> = (0..1000)
-            .map(|i| {
-                let e = AreaEmission { radiance: Rgb::ONE, two_sided: false };
-                let p = Vec3A::new((i % 40) as f32 * 0.1, 2.0, (i / 40) as f32 * 0.1);
-                Light::Quad(QuadLight::new(p, Vec3A::X * 0.05, Vec3A::Z * 0.05, e).unwrap())
-            })
-            .collect();
+        let lights = equal_lamps(1000, 40, 0.1);
         let tree = LightTree::new(&lights);
         let far = ShadingContext { p: Vec3A::new(2.0, -500.0, 1.2), n: Vec3A::Y };
         for k in 0..2000 {
@@ -415,14 +420,7 @@ mod tests {
     fn a_small_tree_is_as_shallow_as_four_wide_nodes_allow() {
         // 81 equal lamps in a 9 × 9 ceiling grid (cornell-9x9.ron): 4⁴ ≥ 81 > 4³. Charging
         // nodes in the collapse, as for large trees, left it 5 levels deep.
-        let lights: Vec<Light> = (0..81)
-            .map(|i| {
-                let e = AreaEmission { radiance: Rgb::ONE, two_sided: false };
-                let p = Vec3A::new((i % 9) as f32 * 0.2, 2.0, (i / 9) as f32 * 0.2);
-                Light::Quad(QuadLight::new(p, Vec3A::X * 0.05, Vec3A::Z * 0.05, e).unwrap())
-            })
-            .collect();
-        assert_eq!(LightTree::new(&lights).stats().depth, 4);
+        assert_eq!(LightTree::new(&equal_lamps(81, 9, 0.2)).stats().depth, 4);
     }
 
     #[test]
