@@ -40,7 +40,7 @@ fn selection(c: &mut Criterion) {
             if kind == LightSamplerKind::Local && n > 10_000 {
                 group.sample_size(10);
             }
-            let LightStrategy::One(s) = LightStrategy::build(kind, &lights, 20.0) else { unreachable!() };
+            let LightStrategy::One(s) = LightStrategy::build(kind, &lights, Vec3A::ZERO, 20.0) else { unreachable!() };
             let mut k = 0u64;
             group.bench_with_input(BenchmarkId::new(kind.name(), n), &n, |b, _| {
                 b.iter(|| {

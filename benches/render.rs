@@ -25,7 +25,7 @@ fn bench(c: &mut Criterion) {
             if kind == LightSamplerKind::All && s.lights.len() > 100 {
                 continue;
             }
-            let strategy = LightStrategy::build(kind, &s.lights, s.radius);
+            let strategy = LightStrategy::build(kind, &s.lights, s.center, s.radius);
             let (budget, resolution) = (Budget::Spp(4), UVec2::new(80, 60));
             let settings = RenderSettings { budget, seed: 0, max_depth: 8, resolution, aovs: Default::default() };
             group.bench_with_input(BenchmarkId::new(kind.name(), name), &name, |b, _| {

@@ -17,7 +17,7 @@
 //! // The built-in Cornell box, tiny and quick.
 //! let opts = BuildOptions { resolution: Some(UVec2::new(16, 12)), camera: None };
 //! let scene = commands::load_scene(None, &opts.clone().into()).unwrap().scene;
-//! let strategy = LightStrategy::build(LightSamplerKind::Power, &scene.lights, scene.radius);
+//! let strategy = LightStrategy::build(LightSamplerKind::Power, &scene.lights, scene.center, scene.radius);
 //! let settings = render::RenderSettings {
 //!     budget: render::Budget::Spp(4), seed: 1, max_depth: 4, resolution: UVec2::new(16, 12),
 //!     aovs: Default::default(),

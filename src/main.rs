@@ -19,7 +19,7 @@ use myriad::settings::LightSamplerKind;
 /// myriad: a path tracer for scenes lit by very many lights.
 ///
 /// Renders .ron scenes (with procedural light grids), glTF (.gltf, .glb) and .obj files to EXR, choosing
-/// lights with one of several samplers (all, uniform, power, local, tree, learned), compares the
+/// lights with one of several samplers (all, uniform, power, local, tree, learned, cells), compares the
 /// samplers on your own scenes (`myriad compare`), streams to tev (`--display`), and splits a
 /// render into sample ranges for a cluster (`--samples`, `merge`, `slurm`).
 #[derive(Parser)]
@@ -43,7 +43,7 @@ enum Command {
     ///
     /// Without SCENE, renders the built-in Cornell box with a 5x5 grid of ceiling lights.
     /// Settings not given here come from the scene file's `render` block, then defaults
-    /// (64 spp, max depth 8, sampler tree, seed 0).
+    /// (64 spp, max depth 8, sampler cells, seed 0).
     Render(RenderArgs),
     /// Render a scene with several light samplers and measure each against a reference.
     ///
@@ -84,8 +84,8 @@ enum Command {
     /// Watch a scene converge in a window, switching light samplers live.
     ///
     /// The render refines pass after pass (1 spp at first, so an image appears at once) until
-    /// --spp or --time, if given. Keys: 1-6 pick the sampler (all, uniform, power, local,
-    /// tree, learned; the accumulation restarts), + and - change the exposure, E flips to the
+    /// --spp or --time, if given. Keys: 1-7 pick the sampler (all, uniform, power, local,
+    /// tree, learned, cells; the accumulation restarts), + and - change the exposure, E flips to the
     /// false-colour relative error against the reference (--reference, or the one `myriad
     /// compare` cached in compare-NAME/), S saves the image so far as
     /// OUT-DIR/view-SAMPLER-Nspp.exr, R puts the camera back, Esc or Q closes. Mouse: drag
@@ -266,7 +266,7 @@ struct MergeArgs {
 struct CompareArgs {
     /// Scene file (.ron, .obj, .gltf or .glb).
     scene: PathBuf,
-    /// Samplers to compare, comma-separated [default: uniform,power,local,tree and the
+    /// Samplers to compare, comma-separated [default: uniform,power,local,tree,cells and the
     /// scene file's own sampler].
     #[arg(long, value_parser = sampler_parser(), value_delimiter = ',')]
     samplers: Option<Vec<LightSamplerKind>>,

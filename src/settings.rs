@@ -26,6 +26,9 @@ pub enum LightSamplerKind {
     Local,
     /// One light, by descending a light BVH with the same importance (O(log n)).
     Tree,
+    /// One light, from a table per cell of space of `local`'s importances (a look-up per
+    /// choice; for 8 to 256 lights, the tree outside that range and in cells next to lights).
+    Cells,
     /// The light BVH, its first levels reweighted per region of the scene by how much of
     /// each cluster's light earlier passes saw arrive (occlusion learned).
     Learned,
@@ -33,13 +36,14 @@ pub enum LightSamplerKind {
 
 impl LightSamplerKind {
     /// Every sampler, in the order the command line lists them.
-    pub const EVERY: [LightSamplerKind; 6] = [
+    pub const EVERY: [LightSamplerKind; 7] = [
         LightSamplerKind::All,
         LightSamplerKind::Uniform,
         LightSamplerKind::Power,
         LightSamplerKind::Local,
         LightSamplerKind::Tree,
         LightSamplerKind::Learned,
+        LightSamplerKind::Cells,
     ];
 
     /// The name used on the command line, in scene files and in file headers.
@@ -51,6 +55,7 @@ impl LightSamplerKind {
             LightSamplerKind::Local => "local",
             LightSamplerKind::Tree => "tree",
             LightSamplerKind::Learned => "learned",
+            LightSamplerKind::Cells => "cells",
         }
     }
 }

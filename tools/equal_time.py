@@ -2,14 +2,15 @@
 """Does the default sampler win at equal time? `myriad compare` on every shipped scene.
 
     python3 tools/equal_time.py [--time 2] [--seeds 2] [--resolution 160x120]
-        [--reference-spp 512] [--out target/equal-time] [SCENE ...]
+        [--reference-spp 512] [--out target/equal-time] [--also cells] [SCENE ...]
 
 Runs `myriad compare SCENE --samplers uniform,power,tree --time T --seeds K` (the reference
 rendered once with `tree` at `--reference-spp` and cached per scene) on `scenes/*.ron`
 (except the 102 400-lamp grid, whose uniform runs say little in seconds) and the Blender
 exports in `tests/data/blender/`, or on the scenes given, and prints each sampler's
 efficiency (1 / (relMSE · seconds), mean over the seeds) and the default's ratio to the best
-of `uniform` and `power`. Only the Python standard library is used.
+of `uniform` and `power`; `--also S,...` adds samplers and each one's ratio to `tree`. Only
+the Python standard library is used.
 """
 
 import argparse
@@ -36,13 +37,17 @@ def main():
     ap.add_argument("--reference-spp", default="512")
     ap.add_argument("--myriad", default=str(ROOT / "target/release/myriad"))
     ap.add_argument("--out", type=Path, default=ROOT / "target/equal-time")
+    ap.add_argument("--also", default="", help="more samplers, comma-separated, each compared with tree")
     args = ap.parse_args()
+    also = [s for s in args.also.split(",") if s and s not in SAMPLERS]
+    samplers = SAMPLERS + also
     if not Path(args.myriad).exists():
         sys.exit(f"{args.myriad} is missing: cargo build --release")
-    rows = ["| scene | lights | " + " | ".join(SAMPLERS) + " | tree ÷ best other |", "|---|---:|" + "---:|" * 4]
+    rows = ["| scene | lights | " + " | ".join(samplers) + " | tree ÷ best other |"
+            + "".join(f" {s} ÷ tree |" for s in also), "|---|---:|" + "---:|" * (len(samplers) + 1 + len(also))]
     for scene in args.scenes or default_scenes():
         out = args.out / scene.stem
-        cmd = [args.myriad, "compare", str(scene), "--samplers", ",".join(SAMPLERS), "--time", args.time,
+        cmd = [args.myriad, "compare", str(scene), "--samplers", ",".join(samplers), "--time", args.time,
                "--seeds", args.seeds, "--resolution", args.resolution, "--reference-spp", args.reference_spp,
                "--reference-sampler", "tree", "--out-dir", str(out), "-q"]
         subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
@@ -51,7 +56,8 @@ def main():
         info = subprocess.run([args.myriad, "info", str(scene)], capture_output=True, text=True).stdout
         lights = next((l.split()[1] for l in info.splitlines() if l.startswith("lights")), "?")
         ratio = eff["tree"] / max(eff["uniform"], eff["power"])
-        rows.append(f"| {scene.name} | {lights} | " + " | ".join(f"{eff[s]:.3g}" for s in SAMPLERS) + f" | {ratio:.2f} |")
+        rows.append(f"| {scene.name} | {lights} | " + " | ".join(f"{eff[s]:.3g}" for s in samplers) + f" | {ratio:.2f} |"
+                    + "".join(f" {eff[s] / eff['tree']:.2f} |" for s in also))
         print(rows[-1], flush=True)
     table = "\n".join(rows) + "\n"
     args.out.mkdir(parents=True, exist_ok=True)

@@ -7,7 +7,7 @@
 
 For each scene `tests/data/blender/NAME.glb` it renders, at 320×240 and `--spp` samples with
 8 bounces (myriad: 9 scattering events), every seed of `--seeds`:
-  * myriad with `tree` (the default), `uniform` and `power`;
+  * myriad with `cells` (the default), `tree`, `uniform` and `power`;
   * Cycles 5.0 with its light tree on and off (`cycles_render.py`, Blender's own importer);
   * Mitsuba 3 with uniform and power light weights (`mitsuba_render.py`, llvm_ad_rgb when a
     libLLVM ≥ 17 is installed: `apt-get install libllvm19`; scalar_rgb otherwise).
@@ -61,7 +61,7 @@ def rel_mse(myriad, image, reference):
 
 def myriad_rows(myriad, glb, ref, out, spp, seeds):
     rows = []
-    for sampler in ["tree", "uniform", "power"]:
+    for sampler in ["cells", "tree", "uniform", "power"]:
         runs = []
         for seed in seeds:
             exr = out / f"myriad_{sampler}_{seed}.exr"
@@ -69,7 +69,7 @@ def myriad_rows(myriad, glb, ref, out, spp, seeds):
                    BOUNCES + 1, "--sampler", sampler, "--seed", seed, "-q", "-o", exr, "--no-png"]
             cpu = cpu_of(cmd)
             runs.append((rel_mse(myriad, exr, ref), cpu))
-        label = f"myriad `{sampler}`" + (" (default)" if sampler == "tree" else "")
+        label = f"myriad `{sampler}`" + (" (default)" if sampler == "cells" else "")
         rows.append((label, runs))
     return rows
 

@@ -58,8 +58,10 @@ pub struct RenderReport {
     pub sampler_build_time: Duration,
     /// Its memory.
     pub sampler_bytes: usize,
-    /// The light tree's shape, when the sampler is `tree`.
+    /// The light tree's shape, when the sampler is built on one.
     pub tree: Option<crate::light_sampler::TreeStats>,
+    /// What the `cells` sampler built during the render, when it is the sampler.
+    pub cells: Option<crate::light_sampler::CellStats>,
     /// The settings rendered with.
     pub settings: RenderSettings,
     /// Film and statistics.
@@ -111,7 +113,7 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
     let scene = &loaded.scene;
 
     let t = Instant::now();
-    let strategy = LightStrategy::build(sampler, &scene.lights, scene.radius);
+    let strategy = LightStrategy::build(sampler, &scene.lights, scene.center, scene.radius);
     let sampler_build_time = t.elapsed();
 
     let _busy = crate::interrupt::busy();
@@ -135,6 +137,7 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
         sampler_build_time,
         sampler_bytes: strategy.memory_bytes(),
         tree: strategy.tree_stats(),
+        cells: strategy.cell_stats(),
         settings,
         output,
         written,
@@ -293,6 +296,26 @@ impl fmt::Display for RenderReport {
             st.rays.rays,
             st.rays.shadow_rays
         )?;
+        if self.sampler == LightSamplerKind::Cells && self.cells.is_none() {
+            writeln!(
+                f,
+                "cells      not used with {} lights (its tables are for {} to {} lights, within a quarter of the memory limit): the tree chose everywhere",
+                self.loaded.scene.lights.len(),
+                crate::light_sampler::CELLS_MIN_LIGHTS,
+                crate::light_sampler::CELLS_MAX_LIGHTS
+            )?;
+        }
+        if let Some(c) = &self.cells {
+            writeln!(
+                f,
+                "cells      {} tables in cells of {:.3} m and their halves ({} split, {} left to the tree), {}",
+                c.tables,
+                c.edge,
+                c.splits,
+                c.on_tree,
+                human_bytes(c.memory_bytes as u64)
+            )?;
+        }
         if let Some(l) = &st.learned {
             writeln!(
                 f,

@@ -242,15 +242,7 @@ impl LearnedSampler {
         const HALF: f32 = (1 << 19) as f32;
         let q = (ctx.p * self.inv_cell).floor();
         let coord = |x: f32| (x.clamp(-HALF, HALF - 1.0) + HALF) as u64;
-        let a = ctx.n.abs();
-        let axis: usize = if a.x >= a.y && a.x >= a.z {
-            0
-        } else if a.y >= a.z {
-            1
-        } else {
-            2
-        };
-        let bin = if ctx.n == crate::math::Vec3A::ZERO { 6 } else { 2 * axis as u64 + (ctx.n[axis] < 0.0) as u64 };
+        let bin = super::normal_bin(ctx.n) as u64;
         coord(q.x) | coord(q.y) << 20 | coord(q.z) << 40 | bin << 60
     }
 

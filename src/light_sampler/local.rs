@@ -76,8 +76,25 @@ impl LocalSampler {
             + (self.order.capacity() + self.slot.capacity()) * 4
     }
 
+    /// Number of lights.
+    pub fn lights(&self) -> usize {
+        self.order.len()
+    }
+
+    /// The light in slot (Morton position) `slot`.
+    #[inline]
+    pub fn light_at(&self, slot: usize) -> LightId {
+        LightId(self.order[slot])
+    }
+
+    /// The slot (Morton position) of `light`.
+    #[inline]
+    pub fn slot_of(&self, light: LightId) -> usize {
+        self.slot[light.0 as usize] as usize
+    }
+
     /// Fills `out` with every light's importance at `ctx`, in slot (Morton) order.
-    fn importances(&self, ctx: &ShadingContext, out: &mut Vec<f32>) {
+    pub fn importances(&self, ctx: &ShadingContext, out: &mut Vec<f32>) {
         out.clear();
         out.extend(self.packets.iter().flat_map(|p| p.importance(ctx.p, ctx.n).to_array()));
         out.truncate(self.order.len());

@@ -7,12 +7,14 @@
 //! light, one shadow ray each; not a sampler) beside them. Depends on `light`, `math` and
 //! `settings`.
 
+mod cells;
 mod learned;
 mod local;
 mod power;
 mod tree;
 mod uniform;
 
+pub use cells::{CellSampler, CellStats, MAX_LIGHTS as CELLS_MAX_LIGHTS, MIN_LIGHTS as CELLS_MIN_LIGHTS};
 pub use learned::{DEFENSIVE, LEARN_UNTIL, LEVELS, LearnedLayout, LearnedSampler, LearnedStats, Observations};
 pub use local::LocalSampler;
 pub use power::PowerSampler;
@@ -33,6 +35,21 @@ pub struct ShadingContext {
     pub p: Vec3A,
     /// Unit normal on the side light arrives from, or zero.
     pub n: Vec3A,
+}
+
+/// The bin of a receiver normal that `learned` and `cells` keep apart: 2·axis + (negative)
+/// for its dominant axis and sign, 6 for no normal (a point off surfaces).
+#[inline]
+pub(crate) fn normal_bin(n: Vec3A) -> usize {
+    let a = n.abs();
+    let axis = if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
+    };
+    if n == Vec3A::ZERO { 6 } else { 2 * axis + (n[axis] < 0.0) as usize }
 }
 
 /// A chosen light and the probability it was chosen with.
@@ -81,6 +98,8 @@ pub enum AnyLightSampler {
     Tree(LightTree),
     /// See [`LearnedSampler`].
     Learned(LearnedSampler),
+    /// Per-cell tables of `local`'s importances.
+    Cells(Box<CellSampler>),
 }
 
 impl LightSampler for AnyLightSampler {
@@ -92,6 +111,7 @@ impl LightSampler for AnyLightSampler {
             AnyLightSampler::Local(s) => s.sample(ctx, u),
             AnyLightSampler::Tree(s) => s.sample(ctx, u),
             AnyLightSampler::Learned(s) => s.sample(ctx, u),
+            AnyLightSampler::Cells(s) => s.sample(ctx, u),
         }
     }
 
@@ -103,6 +123,7 @@ impl LightSampler for AnyLightSampler {
             AnyLightSampler::Local(s) => s.cell(ctx, light),
             AnyLightSampler::Tree(s) => s.cell(ctx, light),
             AnyLightSampler::Learned(s) => s.cell(ctx, light),
+            AnyLightSampler::Cells(s) => s.cell(ctx, light),
         }
     }
 }
@@ -145,6 +166,7 @@ impl AnyLightSampler {
             AnyLightSampler::Local(s) => s.memory_bytes(),
             AnyLightSampler::Tree(s) => s.stats().memory_bytes,
             AnyLightSampler::Learned(s) => s.memory_bytes(),
+            AnyLightSampler::Cells(s) => s.stats().memory_bytes,
         }
     }
 }
@@ -159,9 +181,10 @@ pub enum LightStrategy {
 }
 
 impl LightStrategy {
-    /// Builds the strategy `kind` over `lights` (`scene_radius` sizes directional lights'
-    /// power). With no lights, every strategy is `All` (over nothing).
-    pub fn build(kind: LightSamplerKind, lights: &[Light], scene_radius: f32) -> Self {
+    /// Builds the strategy `kind` over `lights` in a scene whose bounding sphere has centre
+    /// `scene_centre` and radius `scene_radius` (which also sizes directional lights' power).
+    /// With no lights, every strategy is `All` (over nothing).
+    pub fn build(kind: LightSamplerKind, lights: &[Light], scene_centre: Vec3A, scene_radius: f32) -> Self {
         if lights.is_empty() {
             return LightStrategy::All;
         }
@@ -178,6 +201,18 @@ impl LightStrategy {
             LightSamplerKind::Learned => {
                 LightStrategy::One(AnyLightSampler::Learned(LearnedSampler::new(lights, scene_radius)))
             }
+            // Outside its range the tree does better, and the tables must fit (see `cells`).
+            LightSamplerKind::Cells
+                if !(cells::MIN_LIGHTS..=cells::MAX_LIGHTS).contains(&lights.len())
+                    || cells::most_bytes(lights.len()) > crate::limits::memory_limit().bytes / 4 =>
+            {
+                LightStrategy::One(AnyLightSampler::Tree(LightTree::new(lights)))
+            }
+            LightSamplerKind::Cells => LightStrategy::One(AnyLightSampler::Cells(Box::new(CellSampler::new(
+                lights,
+                scene_centre,
+                scene_radius,
+            )))),
         }
     }
 
@@ -186,6 +221,15 @@ impl LightStrategy {
         match self {
             LightStrategy::One(AnyLightSampler::Tree(t)) => Some(t.stats()),
             LightStrategy::One(AnyLightSampler::Learned(l)) => Some(l.tree().stats()),
+            LightStrategy::One(AnyLightSampler::Cells(c)) => Some(c.tree().stats()),
+            _ => None,
+        }
+    }
+
+    /// What the `cells` sampler has built, when this is it.
+    pub fn cell_stats(&self) -> Option<CellStats> {
+        match self {
+            LightStrategy::One(AnyLightSampler::Cells(c)) => Some(c.stats()),
             _ => None,
         }
     }

@@ -130,7 +130,7 @@ fn render_writes_exr_with_provenance_and_png_and_nothing_else() {
         assert!(layers.channel(c).is_some(), "missing channel {c}");
     }
     let get = |k: &str| meta.iter().find(|(a, _)| a == k).map(|(_, v)| v.clone());
-    assert_eq!(get("myriad.sampler").as_deref(), Some("tree"));
+    assert_eq!(get("myriad.sampler").as_deref(), Some("cells"));
     assert_eq!(get("myriad.spp").as_deref(), Some("4"));
     assert_eq!(get("myriad.seed").as_deref(), Some("3"));
     assert_eq!(get("myriad.max_depth").as_deref(), Some("8"));

@@ -223,7 +223,7 @@ fn compare_takes_what_the_scene_file_asks_unless_the_command_line_says_otherwise
     (opts.scene, opts.samplers, opts.settings, opts.reference_spp) = (scene, None, RenderRequest::default(), Some(2));
     let report = compare(&opts).unwrap();
     let names: Vec<&str> = report.samplers.iter().map(|s| s.sampler.as_str()).collect();
-    assert_eq!(names, ["uniform", "power", "local", "tree", "all"]);
+    assert_eq!(names, ["uniform", "power", "local", "tree", "cells", "all"]);
     assert_eq!(report.max_depth, 2);
     for s in &report.samplers {
         let seeds: Vec<(u64, u32)> = s.runs.iter().map(|r| (r.seed, r.spp)).collect();

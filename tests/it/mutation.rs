@@ -370,7 +370,7 @@ fn exercise(path: &Path) -> myriad::Result<()> {
     let loaded = load_scene(Some(path), &options)?;
     let (scene, resolution) = (loaded.scene, loaded.report.resolution);
     for kind in [LightSamplerKind::Tree, LightSamplerKind::Power] {
-        let strategy = LightStrategy::build(kind, &scene.lights, scene.radius);
+        let strategy = LightStrategy::build(kind, &scene.lights, scene.center, scene.radius);
         let settings =
             RenderSettings { budget: Budget::Spp(1), seed: 1, max_depth: 3, resolution, aovs: Default::default() };
         render(&scene, &strategy, &settings, &mut ());

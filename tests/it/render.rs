@@ -13,10 +13,10 @@ use myriad::scene::description::LightDesc;
 use myriad::scene::shapes::{box_mesh, quad_mesh};
 use myriad::settings::LightSamplerKind;
 
-pub const ALL_KINDS: [LightSamplerKind; 6] = LightSamplerKind::EVERY;
+pub const ALL_KINDS: [LightSamplerKind; 7] = LightSamplerKind::EVERY;
 
 pub fn render_with(scene: &TestScene, kind: LightSamplerKind, spp: u32, max_depth: u32, seed: u64) -> Film {
-    let strategy = LightStrategy::build(kind, &scene.lights, scene.radius);
+    let strategy = LightStrategy::build(kind, &scene.lights, scene.center, scene.radius);
     let resolution = scene.resolution;
     let settings = RenderSettings { budget: Budget::Spp(spp), seed, max_depth, resolution, aovs: Default::default() };
     render(scene, &strategy, &settings, &mut ()).film
@@ -189,7 +189,7 @@ fn tessellated_emissive_box_renders_the_analytic_value() {
     // Every cell of a face is a parallelogram: one quad light.
     assert_eq!(scene.lights.len(), 6 * k * k);
     let expect = le * (1.0 - rho.powi(3)) / (1.0 - rho);
-    let kinds = [LightSamplerKind::Local, LightSamplerKind::Tree];
+    let kinds = [LightSamplerKind::Local, LightSamplerKind::Tree, LightSamplerKind::Cells];
     for kind in kinds {
         let film = render_with(&scene, kind, 96, 2, 8);
         check_against(&film, &|_| Rgb::splat(expect), sidak(kinds.len()), kind.name());
@@ -230,8 +230,9 @@ pub fn compare_films(a: &Film, b: &Film, alpha: f64, label: &str) {
 
 #[test]
 fn same_seed_gives_identical_pixels_for_any_thread_count() {
-    // `learned` too: what it learns between passes must not depend on the threads either.
-    for kind in [LightSamplerKind::Power, LightSamplerKind::Learned] {
+    // `learned` too: what it learns between passes must not depend on the threads either;
+    // and `cells`, whose tables whichever thread comes first builds.
+    for kind in [LightSamplerKind::Power, LightSamplerKind::Learned, LightSamplerKind::Cells] {
         identical_for_any_thread_count(kind);
     }
 }
@@ -272,7 +273,7 @@ fn pass_boundaries_do_not_change_pixels() {
     // timed render reached, a fixed-spp render of that many samples matches it bit for bit.
     let opts = BuildOptions { resolution: Some(UVec2::new(8, 6)), camera: None };
     let scene = load_scene(None, &opts.clone().into()).unwrap().scene;
-    let strategy = LightStrategy::build(LightSamplerKind::Uniform, &scene.lights, scene.radius);
+    let strategy = LightStrategy::build(LightSamplerKind::Uniform, &scene.lights, scene.center, scene.radius);
     let resolution = UVec2::new(8, 6);
     let settings =
         RenderSettings { budget: Budget::Spp(8), seed: 9, max_depth: 4, resolution, aovs: Default::default() };
@@ -296,7 +297,7 @@ fn a_progressive_render_in_passes_of_its_own_is_the_render_and_a_called_off_pass
     // its view changes: the image at 8 spp is `render`'s, and a called-off pass is None.
     let resolution = UVec2::new(8, 6);
     let scene = load_scene(None, &BuildOptions { resolution: Some(resolution), camera: None }.into()).unwrap().scene;
-    let strategy = LightStrategy::build(LightSamplerKind::Learned, &scene.lights, scene.radius);
+    let strategy = LightStrategy::build(LightSamplerKind::Learned, &scene.lights, scene.center, scene.radius);
     let settings =
         RenderSettings { budget: Budget::Spp(8), seed: 4, max_depth: 3, resolution, aovs: Default::default() };
     let mut progressive = myriad::render::Progressive::new(&scene, &strategy, &settings);
@@ -322,7 +323,7 @@ fn the_image_size_is_a_render_setting_not_part_of_the_scene() {
         load_scene(None, &opts.into()).unwrap().scene
     };
     let (small, large) = (built(8, 6), built(16, 12));
-    let strategy = LightStrategy::build(LightSamplerKind::Power, &small.lights, small.radius);
+    let strategy = LightStrategy::build(LightSamplerKind::Power, &small.lights, small.center, small.radius);
     let resolution = UVec2::new(16, 12);
     let settings =
         RenderSettings { budget: Budget::Spp(4), seed: 3, max_depth: 4, resolution, aovs: Default::default() };

@@ -14,7 +14,7 @@ const ORBIT_PER_PIXEL: f32 = 0.01;
 const DOLLY_PER_NOTCH: f32 = 0.1;
 
 /// The keys, as the status bar and `--help` list them.
-pub const KEYS: &str = "1-6 sampler  +/- exposure  E error  S save  R reset  Esc quit";
+pub const KEYS: &str = "1-7 sampler  +/- exposure  E error  S save  R reset  Esc quit";
 
 /// What a key asks for.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -33,9 +33,9 @@ pub enum Action {
     Quit,
 }
 
-/// The action of a key: 1–6 pick the samplers in the order `--sampler` lists them.
+/// The action of a key: 1–7 pick the samplers in the order `--sampler` lists them.
 pub fn action(key: Key) -> Option<Action> {
-    let digits = [Key::Key1, Key::Key2, Key::Key3, Key::Key4, Key::Key5, Key::Key6];
+    let digits = [Key::Key1, Key::Key2, Key::Key3, Key::Key4, Key::Key5, Key::Key6, Key::Key7];
     if let Some(i) = digits.iter().position(|&k| k == key) {
         return LightSamplerKind::EVERY.get(i).map(|&s| Action::Sampler(s));
     }
@@ -108,6 +108,7 @@ mod tests {
         assert_eq!(action(Key::Key1), Some(Action::Sampler(LightSamplerKind::All)));
         assert_eq!(action(Key::Key5), Some(Action::Sampler(LightSamplerKind::Tree)));
         assert_eq!(action(Key::Key6), Some(Action::Sampler(LightSamplerKind::Learned)));
+        assert_eq!(action(Key::Key7), Some(Action::Sampler(LightSamplerKind::Cells)));
         assert_eq!(action(Key::Minus), Some(Action::Exposure(-EXPOSURE_STEP)));
         assert_eq!(action(Key::Escape), Some(Action::Quit));
         assert_eq!(action(Key::Z), None);

@@ -113,7 +113,7 @@ pub fn run(
         scene.camera = view.camera;
         let strategy = strategies
             .entry(view.sampler)
-            .or_insert_with(|| LightStrategy::build(view.sampler, &scene.lights, scene.radius));
+            .or_insert_with(|| LightStrategy::build(view.sampler, &scene.lights, scene.center, scene.radius));
         cancel.store(false, Ordering::Relaxed);
         match accumulate(scene, strategy, view, plan, cancel, &orders, &reports) {
             Some(next) => view = next,

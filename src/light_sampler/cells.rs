@@ -1,0 +1,368 @@
+//! `cells`: the per-point weighting of `local`, tabulated once per cell of space where a table
+//! can stand for the cell, and the light tree where it cannot.
+//!
+//! Space is cut into a grid of cubes ([`CELLS_PER_RADIUS`] along the scene's radius, over the
+//! cube about its bounding sphere) times seven normal bins (the dominant axis and sign of the
+//! normal, and one for points off surfaces). The first time a shading point falls in a cell,
+//! the cell is built: every light's importance (`BoundsPacket::importance`, as `local` and the
+//! tree weigh lights) is taken along the bin's axis at the cell's centre and eight corners
+//! (a surface through the cell, a floor on its face, may pass near any of them), as a share
+//! of their sum; the table is the mean of those shares, mixed with a uniform share
+//! [`UNIFORM_SHARE`] so that no light has pmf 0 anywhere in the cell. Where at one of the
+//! nine points some light would get more than [`TRUST`] times the table's probability (a
+//! lamp or a point light close by, a spot's cone edge through the cell), the table would
+//! starve it there: the cell is split into its eight halves, each built the same way when a
+//! point first lands in it, down to [`SPLITS`] halvings, below which the light tree chooses
+//! at the point itself. Elsewhere a choice is a binary search in the cell's
+//! [`Distribution1D`] (lights in `local`'s Morton order), with no importance evaluated,
+//! where the tree evaluates four on every level it descends.
+//!
+//! A cell's content is a pure function of the cell, so which thread builds it first changes
+//! nothing: images are bit-identical for any thread count and any split of the samples, and
+//! the pmf at a BSDF hit is the one the light was sampled with (the same cell, the same table
+//! or the same tree). Only cells that shading points reach are built, 8 bytes per light each
+//! ([`most_bytes`] bounds them); the sampler takes [`MIN_LIGHTS`] to [`MAX_LIGHTS`] lights
+//! (outside, or where the bound passes a quarter of the memory limit, `LightStrategy::build`
+//! builds the `tree` in its place, and the render summary says so).
+
+use std::sync::OnceLock;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use super::local::LocalSampler;
+use super::tree::LightTree;
+use super::{LightSampler, SampledLight, ShadingContext};
+use crate::light::{Light, LightId};
+use crate::math::Vec3A;
+use crate::math::distribution::Distribution1D;
+
+/// Grid cells along the scene's radius (a cell's edge is radius / this).
+pub const CELLS_PER_RADIUS: f32 = 8.0;
+/// Share of every table's probability spread evenly over all lights.
+pub const UNIFORM_SHARE: f32 = 0.1;
+/// A table stands for its cell when no light's share at a corner exceeds this many times
+/// its probability in the table.
+pub const TRUST: f32 = 4.0;
+/// Fewest lights the sampler takes: below, the tree is a node or two, and its per-point
+/// weights are worth their cost (punctual.glb, 3 lights: relMSE per sample 4.6e-4 against
+/// the tree's 2.9e-4, 0.86 of its efficiency; panels.glb, 4 lights: 0.93–1.12 of the tree's
+/// efficiency over four runs of `tools/equal_time.py`, no clear gain).
+pub const MIN_LIGHTS: usize = 8;
+/// Halvings of a grid cell whose table would not do, before the tree takes over (two gave
+/// the same error on cornell_grid_7.glb, for nine times the most memory).
+pub const SPLITS: u32 = 1;
+/// Most lights the sampler takes (a cell's table is 8 bytes per light; at 1024 lights the
+/// tables cost more time than they save: cornell-32x32 0.88 of the tree's efficiency).
+pub const MAX_LIGHTS: usize = 256;
+/// Cells along each axis of the grid.
+const SIDE: usize = 2 * CELLS_PER_RADIUS as usize + 1;
+/// Normal bins: ±x, ±y, ±z and none.
+const BINS: usize = 7;
+
+/// What a cell chooses with.
+#[derive(Debug)]
+enum Cell {
+    /// The cell's own table.
+    Table(Distribution1D),
+    /// Its eight halves, built on first use (octant bit 0: upper x, bit 1: y, bit 2: z).
+    Split(Box<[OnceLock<Cell>; 8]>),
+    /// The light tree, at the point itself.
+    Tree,
+}
+
+/// The most bytes a sampler over `lights` lights can come to: every grid cell and bin
+/// reached and split as far as [`SPLITS`] allows. `LightStrategy::build` uses the tree
+/// instead when this passes a quarter of the memory limit.
+pub fn most_bytes(lights: usize) -> u64 {
+    let grid = (SIDE * SIDE * SIDE * BINS) as u64;
+    let cells_per_grid_cell: u64 = (0..=SPLITS).map(|l| 8u64.pow(l)).sum();
+    let table = (lights * 8 + std::mem::size_of::<Cell>()) as u64;
+    grid * (cells_per_grid_cell * (table + std::mem::size_of::<OnceLock<Cell>>() as u64))
+}
+
+/// What a [`CellSampler`] has built, for the render summary.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CellStats {
+    /// Edge of a grid cell.
+    pub edge: f32,
+    /// Cells (grid cells and halves of them) with a table.
+    pub tables: usize,
+    /// Cells split into halves.
+    pub splits: usize,
+    /// Cells left to the tree.
+    pub on_tree: usize,
+    /// Bytes of the sampler (tree, grid and tables).
+    pub memory_bytes: usize,
+}
+
+/// Per-cell light tables over at most [`MAX_LIGHTS`] lights, the tree where they fail.
+#[derive(Debug)]
+pub struct CellSampler {
+    local: LocalSampler,
+    tree: LightTree,
+    /// Corner of the grid.
+    origin: Vec3A,
+    /// Edge of a cell.
+    edge: f32,
+    /// Every grid cell, built on first use.
+    cells: Vec<OnceLock<Cell>>,
+    /// Cells built so far with a table, split, and left to the tree.
+    tables: AtomicUsize,
+    splits: AtomicUsize,
+    on_tree: AtomicUsize,
+}
+
+impl Clone for CellSampler {
+    /// A sampler over the same lights with no cell built yet (each rebuilds the same).
+    fn clone(&self) -> Self {
+        Self {
+            local: self.local.clone(),
+            tree: self.tree.clone(),
+            cells: empty_cells(),
+            tables: AtomicUsize::new(0),
+            splits: AtomicUsize::new(0),
+            on_tree: AtomicUsize::new(0),
+            ..*self
+        }
+    }
+}
+
+fn empty_cells() -> Vec<OnceLock<Cell>> {
+    (0..SIDE * SIDE * SIDE * BINS).map(|_| OnceLock::new()).collect()
+}
+
+/// The receiver normal of bin `bin` (zero for the bin of points off surfaces).
+fn bin_normal(bin: usize) -> Vec3A {
+    let mut n = Vec3A::ZERO;
+    if bin < 6 {
+        n[bin / 2] = if bin & 1 == 0 { 1.0 } else { -1.0 };
+    }
+    n
+}
+
+impl CellSampler {
+    /// A sampler over `lights` (1 to [`MAX_LIGHTS`]) in a scene whose bounding sphere has
+    /// centre `centre` and radius `radius`.
+    pub fn new(lights: &[Light], centre: Vec3A, radius: f32) -> Self {
+        assert!(!lights.is_empty() && lights.len() <= MAX_LIGHTS, "1 to {MAX_LIGHTS} lights");
+        let radius = radius.max(1e-6);
+        Self {
+            local: LocalSampler::new(lights),
+            tree: LightTree::new(lights),
+            origin: centre - Vec3A::splat(radius),
+            edge: radius / CELLS_PER_RADIUS,
+            cells: empty_cells(),
+            tables: AtomicUsize::new(0),
+            splits: AtomicUsize::new(0),
+            on_tree: AtomicUsize::new(0),
+        }
+    }
+
+    /// What it has built so far.
+    pub fn stats(&self) -> CellStats {
+        let load = |c: &AtomicUsize| c.load(Ordering::Relaxed);
+        let (tables, splits, on_tree) = (load(&self.tables), load(&self.splits), load(&self.on_tree));
+        let memory_bytes = self.local.memory_bytes()
+            + self.tree.stats().memory_bytes
+            + (self.cells.len() + 8 * splits) * std::mem::size_of::<OnceLock<Cell>>()
+            + tables * self.local.lights() * 8;
+        CellStats { edge: self.edge, tables, splits, on_tree, memory_bytes }
+    }
+
+    /// The light tree it chooses with where a table would not do.
+    pub fn tree(&self) -> &LightTree {
+        &self.tree
+    }
+
+    /// The grid cell of `ctx` (its position clamped to the grid, and its normal bin): its
+    /// index, its lowest corner and the normal it is built for.
+    #[inline]
+    fn grid_cell(&self, ctx: &ShadingContext) -> (usize, Vec3A, Vec3A) {
+        let q = ((ctx.p - self.origin) / self.edge).floor().clamp(Vec3A::ZERO, Vec3A::splat((SIDE - 1) as f32));
+        let bin = super::normal_bin(ctx.n);
+        let index = (((q.x as usize * SIDE) + q.y as usize) * SIDE + q.z as usize) * BINS + bin;
+        (index, self.origin + q * self.edge, bin_normal(bin))
+    }
+
+    /// What chooses at `ctx`: the table of the smallest cell holding it, or the tree. Cells
+    /// are built on first use.
+    #[inline]
+    fn choice(&self, ctx: &ShadingContext) -> Option<&Distribution1D> {
+        let (index, mut corner, n) = self.grid_cell(ctx);
+        let (mut edge, mut level) = (self.edge, 0);
+        let mut cell = self.cells[index].get_or_init(|| self.build(corner, edge, n, level));
+        loop {
+            match cell {
+                Cell::Table(t) => return Some(t),
+                Cell::Tree => return None,
+                Cell::Split(octants) => {
+                    (edge, level) = (0.5 * edge, level + 1);
+                    let upper = (ctx.p - corner).cmpge(Vec3A::splat(edge));
+                    corner += Vec3A::select(upper, Vec3A::splat(edge), Vec3A::ZERO);
+                    cell = octants[upper.bitmask() as usize].get_or_init(|| self.build(corner, edge, n, level));
+                }
+            }
+        }
+    }
+
+    /// Importances at `p` along `n`, each as a share of their sum (`None` when all are 0).
+    fn shares(&self, p: Vec3A, n: Vec3A, w: &mut Vec<f32>) -> Option<f64> {
+        self.local.importances(&ShadingContext { p, n }, w);
+        let total: f64 = w.iter().map(|&x| x.max(0.0) as f64).sum();
+        (total > 0.0 && total.is_finite()).then_some(total)
+    }
+
+    /// The cube at `corner` of edge `edge`, `level` halvings below the grid, for receivers
+    /// along `n`: its table from its centre, or, when a corner disagrees, its eight halves
+    /// (the tree below [`SPLITS`] halvings).
+    fn build(&self, corner: Vec3A, edge: f32, n: Vec3A, level: u32) -> Cell {
+        let cell = self.table(corner, edge, n).map_or_else(
+            || {
+                if level < SPLITS {
+                    Cell::Split(Box::new(std::array::from_fn(|_| OnceLock::new())))
+                } else {
+                    Cell::Tree
+                }
+            },
+            Cell::Table,
+        );
+        let counter = match cell {
+            Cell::Table(_) => &self.tables,
+            Cell::Split(_) => &self.splits,
+            Cell::Tree => &self.on_tree,
+        };
+        counter.fetch_add(1, Ordering::Relaxed);
+        cell
+    }
+
+    /// The table of a cube: the mean of the lights' shares at its centre and its eight
+    /// corners (a surface through the cube may pass near any of them), or `None` when at
+    /// one of those points some light would get more than [`TRUST`] times the table's
+    /// probability.
+    fn table(&self, corner: Vec3A, edge: f32, n: Vec3A) -> Option<Distribution1D> {
+        let count = self.local.lights();
+        let points = (0..8)
+            .map(|k| corner + Vec3A::new((k & 1) as f32, ((k >> 1) & 1) as f32, (k >> 2) as f32) * edge)
+            .chain([corner + Vec3A::splat(0.5 * edge)]);
+        let (mut w, mut seen) = (Vec::new(), Vec::new());
+        let mut mean = vec![0.0f64; count];
+        for p in points {
+            let Some(total) = self.shares(p, n, &mut w) else { continue };
+            let shares: Vec<f64> = w.iter().map(|&x| x.max(0.0) as f64 / total).collect();
+            mean.iter_mut().zip(&shares).for_each(|(m, x)| *m += x);
+            seen.push(shares);
+        }
+        let even = UNIFORM_SHARE as f64 / count as f64;
+        let probabilities: Vec<f64> = if seen.is_empty() {
+            vec![1.0 / count as f64; count]
+        } else {
+            mean.iter().map(|m| (1.0 - UNIFORM_SHARE as f64) * m / seen.len() as f64 + even).collect()
+        };
+        let starved = seen.iter().any(|s| s.iter().zip(&probabilities).any(|(&x, &p)| x > TRUST as f64 * p));
+        if starved {
+            return None;
+        }
+        let weights: Vec<f32> = probabilities.iter().map(|&p| p as f32).collect();
+        Some(Distribution1D::new(&weights).expect("every weight has the positive uniform share"))
+    }
+}
+
+impl LightSampler for CellSampler {
+    #[inline]
+    fn sample(&self, ctx: &ShadingContext, u: u64) -> Option<SampledLight> {
+        match self.choice(ctx) {
+            Some(t) => {
+                let s = t.sample(u);
+                Some(SampledLight { light: self.local.light_at(s.index), pmf: s.pmf })
+            }
+            None => self.tree.sample(ctx, u),
+        }
+    }
+
+    #[inline]
+    fn cell(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
+        match self.choice(ctx) {
+            Some(t) => t.cell(self.local.slot_of(light)),
+            None => self.tree.cell(ctx, light),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::light::{AreaEmission, PointLight, QuadLight};
+    use crate::math::Rgb;
+
+    fn lamps(n: usize) -> Vec<Light> {
+        (0..n)
+            .map(|i| {
+                let e = AreaEmission { radiance: Rgb::splat(1.0 + (i % 3) as f32), two_sided: false };
+                let p = Vec3A::new((i % 8) as f32 * 0.5, 2.0, (i / 8) as f32 * 0.5);
+                Light::Quad(QuadLight::new(p, Vec3A::X * 0.1, Vec3A::Z * 0.1, e).unwrap())
+            })
+            .collect()
+    }
+
+    fn sampler(lights: &[Light]) -> CellSampler {
+        CellSampler::new(lights, Vec3A::new(1.75, 1.5, 1.0), 4.0)
+    }
+
+    #[test]
+    fn far_from_the_lamps_a_table_keeps_every_light_choosable_and_its_cells_tile() {
+        let lights = lamps(40);
+        let s = sampler(&lights);
+        // Above the lamps, facing up: no lamp faces this point, so only the uniform share is
+        // left, and it is even.
+        let above = ShadingContext { p: Vec3A::new(1.0, 3.5, 1.0), n: Vec3A::Y };
+        for l in 0..40 {
+            assert!((s.pmf(&above, LightId(l)) * 40.0 - 1.0).abs() < 1e-4);
+        }
+        let below = ShadingContext { p: Vec3A::new(0.2, 0.0, 0.2), n: Vec3A::Y };
+        assert!(s.choice(&below).is_some(), "2 m from the lamps a table will do");
+        for l in 0..40 {
+            assert!(s.pmf(&below, LightId(l)) >= 0.999 * UNIFORM_SHARE / 40.0);
+        }
+        assert!(s.pmf(&below, LightId(0)) > 2.0 * s.pmf(&below, LightId(39)), "the near lamp weighs more");
+        check_tiling(&s, &below, 40);
+        assert_eq!((s.stats().tables, s.stats().splits, s.stats().on_tree), (2, 0, 0));
+    }
+
+    #[test]
+    fn next_to_a_point_light_cells_split_and_then_use_the_tree() {
+        let mut lights = lamps(8);
+        lights.push(Light::Point(PointLight { position: Vec3A::new(0.26, 0.001, 0.51), intensity: Rgb::splat(0.01) }));
+        let s = sampler(&lights);
+        let near = ShadingContext { p: Vec3A::new(0.3, 0.0, 0.55), n: Vec3A::Y };
+        assert!(s.choice(&near).is_none(), "a point light 1 mm above the floor, 1 cm off a corner: {:?}", s.stats());
+        for l in 0..9 {
+            assert_eq!(s.pmf(&near, LightId(l)), s.tree.pmf(&near, LightId(l)));
+        }
+        let st = s.stats();
+        assert_eq!((st.splits, st.on_tree), (SPLITS as usize, 1), "{st:?}");
+        // A metre and more away a table does again.
+        let off = ShadingContext { p: Vec3A::new(0.6, 0.0, -0.7), n: Vec3A::Y };
+        assert!(s.choice(&off).is_some());
+        check_tiling(&s, &off, 9);
+    }
+
+    /// Every light's cell at `ctx` is as its pmf says, and the cells tile the 2⁶⁴ values.
+    fn check_tiling(s: &CellSampler, ctx: &ShadingContext, n: u32) {
+        let mut cells: Vec<_> = (0..n).map(|l| s.cell(ctx, LightId(l))).collect();
+        for (l, c) in cells.iter().enumerate() {
+            assert_eq!(s.pmf(ctx, LightId(l as u32)), crate::math::distribution::probability(c.1 - c.0));
+        }
+        cells.sort();
+        assert!(cells.windows(2).all(|c| c[0].1 == c[1].0) && cells[0].0 == 0 && cells.last().unwrap().1 == 1 << 64);
+    }
+
+    #[test]
+    fn a_clone_builds_the_same_cells() {
+        let lights = lamps(20);
+        let a = sampler(&lights);
+        let ctx = ShadingContext { p: Vec3A::new(0.7, 0.3, 1.1), n: -Vec3A::X };
+        let picked = a.sample(&ctx, 0x1234_5678_9abc_def0);
+        let b = a.clone();
+        assert_eq!(b.stats().tables, 0);
+        assert_eq!(b.sample(&ctx, 0x1234_5678_9abc_def0), picked);
+    }
+}
