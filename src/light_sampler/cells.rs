@@ -71,12 +71,19 @@ enum Cell {
 
 /// The most bytes a sampler over `lights` lights can come to: every grid cell and bin
 /// reached and split as far as [`SPLITS`] allows. `LightStrategy::build` uses the tree
-/// instead when this passes a quarter of the memory limit.
+/// instead when this passes a quarter of the memory limit ([`takes`]).
 pub fn most_bytes(lights: usize) -> u64 {
     let grid = (SIDE * SIDE * SIDE * BINS) as u64;
     let cells_per_grid_cell: u64 = (0..=SPLITS).map(|l| 8u64.pow(l)).sum();
     let table = (lights * 8 + std::mem::size_of::<Cell>()) as u64;
     grid * (cells_per_grid_cell * (table + std::mem::size_of::<OnceLock<Cell>>() as u64))
+}
+
+/// Whether a sampler over `lights` lights takes them: [`MIN_LIGHTS`] to [`MAX_LIGHTS`], with
+/// its [`most_bytes`] within a quarter of the memory limit (otherwise the tree does better,
+/// or the tables might not fit).
+pub fn takes(lights: usize) -> bool {
+    (MIN_LIGHTS..=MAX_LIGHTS).contains(&lights) && most_bytes(lights) <= crate::limits::memory_limit().bytes / 4
 }
 
 /// What a [`CellSampler`] has built, for the render summary.
@@ -204,16 +211,17 @@ impl CellSampler {
         }
     }
 
-    /// Importances at `p` along `n`, each as a share of their sum (`None` when all are 0).
-    fn shares(&self, p: Vec3A, n: Vec3A, w: &mut Vec<f32>) -> Option<f64> {
+    /// Every light's importance at `p` along `n` as a share of their sum (`None` when all
+    /// are 0); `w` is scratch.
+    fn shares(&self, p: Vec3A, n: Vec3A, w: &mut Vec<f32>) -> Option<Vec<f64>> {
         self.local.importances(&ShadingContext { p, n }, w);
         let total: f64 = w.iter().map(|&x| x.max(0.0) as f64).sum();
-        (total > 0.0 && total.is_finite()).then_some(total)
+        (total > 0.0 && total.is_finite()).then(|| w.iter().map(|&x| x.max(0.0) as f64 / total).collect())
     }
 
     /// The cube at `corner` of edge `edge`, `level` halvings below the grid, for receivers
-    /// along `n`: its table from its centre, or, when a corner disagrees, its eight halves
-    /// (the tree below [`SPLITS`] halvings).
+    /// along `n`: its [`table`](Self::table), or where none will do, its eight halves (the
+    /// tree below [`SPLITS`] halvings).
     fn build(&self, corner: Vec3A, edge: f32, n: Vec3A, level: u32) -> Cell {
         let cell = self.table(corner, edge, n).map_or_else(
             || {
@@ -246,8 +254,7 @@ impl CellSampler {
         let (mut w, mut seen) = (Vec::new(), Vec::new());
         let mut mean = vec![0.0f64; count];
         for p in points {
-            let Some(total) = self.shares(p, n, &mut w) else { continue };
-            let shares: Vec<f64> = w.iter().map(|&x| x.max(0.0) as f64 / total).collect();
+            let Some(shares) = self.shares(p, n, &mut w) else { continue };
             mean.iter_mut().zip(&shares).for_each(|(m, x)| *m += x);
             seen.push(shares);
         }

@@ -201,11 +201,7 @@ impl LightStrategy {
             LightSamplerKind::Learned => {
                 LightStrategy::One(AnyLightSampler::Learned(LearnedSampler::new(lights, scene_radius)))
             }
-            // Outside its range the tree does better, and the tables must fit (see `cells`).
-            LightSamplerKind::Cells
-                if !(cells::MIN_LIGHTS..=cells::MAX_LIGHTS).contains(&lights.len())
-                    || cells::most_bytes(lights.len()) > crate::limits::memory_limit().bytes / 4 =>
-            {
+            LightSamplerKind::Cells if !cells::takes(lights.len()) => {
                 LightStrategy::One(AnyLightSampler::Tree(LightTree::new(lights)))
             }
             LightSamplerKind::Cells => LightStrategy::One(AnyLightSampler::Cells(Box::new(CellSampler::new(
