@@ -36,14 +36,13 @@ fn light_contribution(
     pmf: f32,
     sp: &ShadingPoint,
     p: Vec3A,
-    wo: Vec3A,
     medium: Rgb,
     u: [u64; 2],
     counters: &mut RayCounters,
     observe: impl FnOnce(f32, bool),
 ) -> Rgb {
     let Some(ls) = light.sample_li(p, u, &scene.images) else { return Rgb::ZERO };
-    let f = sp.eval_cos(wo, ls.wi);
+    let f = sp.eval_cos(ls.wi);
     if f == Rgb::ZERO || !(ls.pdf > 0.0) {
         return Rgb::ZERO;
     }
@@ -64,11 +63,11 @@ fn light_contribution(
     if occluded {
         return Rgb::ZERO;
     }
-    let weight = if light.is_delta() { 1.0 } else { power_heuristic(pmf * ls.pdf, sp.pdf(wo, ls.wi)) };
+    let weight = if light.is_delta() { 1.0 } else { power_heuristic(pmf * ls.pdf, sp.pdf(ls.wi)) };
     unshadowed * weight
 }
 
-/// Direct light reflected towards `wo` at surface point `p` (inside a volume of absorption
+/// Direct light reflected towards the viewer of `sp` at surface point `p` (inside a volume of absorption
 /// `medium`, zero outside), estimated with `strategy`.
 #[inline]
 #[allow(clippy::too_many_arguments)]
@@ -77,7 +76,6 @@ pub fn estimate_direct(
     strategy: &LightStrategy,
     sp: &ShadingPoint,
     p: Vec3A,
-    wo: Vec3A,
     medium: Rgb,
     stream: &SampleStream,
     bounce: u32,
@@ -90,7 +88,7 @@ pub fn estimate_direct(
             .enumerate()
             .map(|(i, light)| {
                 let u = stream.get_2d_u64(bounce, Dim::LightPoint, i as u32);
-                light_contribution(scene, light, 1.0, sp, p, wo, medium, u, &mut tally.rays, |_, _| {})
+                light_contribution(scene, light, 1.0, sp, p, medium, u, &mut tally.rays, |_, _| {})
             })
             .fold(Rgb::ZERO, |a, b| a + b),
         LightStrategy::One(sampler) => {
@@ -107,7 +105,7 @@ pub fn estimate_direct(
                             learner.observe(seen, &ctx, s.light, c, visible);
                         }
                     };
-                    light_contribution(scene, light, s.pmf, sp, p, wo, medium, u_point, rays, observe)
+                    light_contribution(scene, light, s.pmf, sp, p, medium, u_point, rays, observe)
                 }
                 None => Rgb::ZERO,
             }

@@ -166,12 +166,12 @@ pub fn radiance(
         let sp = ShadingPoint::new(bsdf, hit.n_geom, n_shading, wo);
 
         if !scene.lights.is_empty() {
-            l += beta * estimate_direct(scene, strategy, &sp, hit.p, wo, medium, stream, depth, tally);
+            l += beta * estimate_direct(scene, strategy, &sp, hit.p, medium, stream, depth, tally);
         }
 
         let u_lobe = stream.get_1d(depth, Dim::BsdfLobe, 0);
         let u_dir = stream.get_2d(depth, Dim::BsdfDirection, 0);
-        let Some(bs) = sp.sample(wo, u_lobe, u_dir) else { break };
+        let Some(bs) = sp.sample(u_lobe, u_dir) else { break };
         beta *= bs.weight;
         // Refracting into a solid glass object puts the ray in its volume; out of one, back
         // outside (objects are not nested).

@@ -18,7 +18,7 @@ pub mod texture;
 
 pub use diffuse::Diffuse;
 pub use microfacet::Ggx;
-pub use principled::Principled;
+pub use principled::{Principled, PrincipledAt};
 pub use texture::{Image, TextureRef};
 
 use crate::math::frame::Frame;
@@ -47,22 +47,26 @@ pub enum Bsdf {
 }
 
 impl Bsdf {
+    /// The BSDF seen from `wo`: what depends on the outgoing direction alone (the
+    /// Principled lobes' weights) computed once for the queries that follow.
+    #[inline]
+    pub fn at(&self, wo: Vec3A) -> BsdfAt {
+        match self {
+            Bsdf::Diffuse(b) => BsdfAt::Diffuse(*b, wo),
+            Bsdf::Principled(b) => BsdfAt::Principled(b.at(wo)),
+        }
+    }
+
     /// BSDF value, without the cosine.
     #[inline]
     pub fn eval(&self, wo: Vec3A, wi: Vec3A) -> Rgb {
-        match self {
-            Bsdf::Diffuse(b) => b.eval(wo, wi),
-            Bsdf::Principled(b) => b.eval(wo, wi),
-        }
+        self.at(wo).eval(wi)
     }
 
     /// Solid-angle density of [`Bsdf::sample`] returning `wi`.
     #[inline]
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
-        match self {
-            Bsdf::Diffuse(b) => b.pdf(wo, wi),
-            Bsdf::Principled(b) => b.pdf(wo, wi),
-        }
+        self.at(wo).pdf(wi)
     }
 
     /// True when the BSDF can send light through the surface (glass).
@@ -74,9 +78,45 @@ impl Bsdf {
     /// Samples an incident direction; `u_lobe` picks a lobe, `u` the direction in it.
     #[inline]
     pub fn sample(&self, wo: Vec3A, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        self.at(wo).sample(u_lobe, u)
+    }
+}
+
+/// A [`Bsdf`] seen from one outgoing direction (local frame).
+#[derive(Clone, Copy, Debug)]
+#[allow(clippy::large_enum_variant)]
+pub enum BsdfAt {
+    /// Lambertian, and the outgoing direction.
+    Diffuse(Diffuse, Vec3A),
+    /// The Principled BSDF with its lobe weights for that direction.
+    Principled(PrincipledAt),
+}
+
+impl BsdfAt {
+    /// BSDF value towards `wi`, without the cosine.
+    #[inline]
+    pub fn eval(&self, wi: Vec3A) -> Rgb {
         match self {
-            Bsdf::Diffuse(b) => b.sample(wo, u),
-            Bsdf::Principled(b) => b.sample(wo, u_lobe, u),
+            BsdfAt::Diffuse(b, wo) => b.eval(*wo, wi),
+            BsdfAt::Principled(b) => b.eval(wi),
+        }
+    }
+
+    /// Solid-angle density of [`BsdfAt::sample`] returning `wi`.
+    #[inline]
+    pub fn pdf(&self, wi: Vec3A) -> f32 {
+        match self {
+            BsdfAt::Diffuse(b, wo) => b.pdf(*wo, wi),
+            BsdfAt::Principled(b) => b.pdf(wi),
+        }
+    }
+
+    /// Samples an incident direction; `u_lobe` picks a lobe, `u` the direction in it.
+    #[inline]
+    pub fn sample(&self, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        match self {
+            BsdfAt::Diffuse(b, wo) => b.sample(*wo, u),
+            BsdfAt::Principled(b) => b.sample(u_lobe, u),
         }
     }
 }
@@ -260,15 +300,16 @@ impl Material {
     }
 }
 
-/// A BSDF placed on a surface: world ↔ local frame, face-forwarded towards the viewer.
+/// A BSDF placed on a surface and seen from the outgoing direction `wo`: world ↔ local
+/// frame, face-forwarded towards the viewer.
 #[derive(Clone, Copy, Debug)]
 pub struct ShadingPoint {
     /// Shading frame; `frame.n` is on the viewer's side.
     pub frame: Frame,
     /// Geometric normal on the viewer's side (the hit's `n_geom`, face-forwarded).
     pub n_geom: Vec3A,
-    /// The material's BSDF at this point (textures already looked up).
-    pub bsdf: Bsdf,
+    /// The material's BSDF at this point (textures already looked up), seen from `wo`.
+    bsdf: BsdfAt,
     /// Whether light can pass through (then `wi` may lie on either side).
     transmits: bool,
 }
@@ -279,7 +320,8 @@ impl ShadingPoint {
     pub fn new(bsdf: Bsdf, n_geom: Vec3A, n_shading: Vec3A, wo: Vec3A) -> Self {
         let n_geom = if n_geom.dot(wo) < 0.0 { -n_geom } else { n_geom };
         let ns = if n_shading.dot(n_geom) < 0.0 { -n_shading } else { n_shading };
-        Self { frame: Frame::from_normal(ns), n_geom, bsdf, transmits: bsdf.transmits() }
+        let frame = Frame::from_normal(ns);
+        Self { frame, n_geom, bsdf: bsdf.at(frame.to_local(wo)), transmits: bsdf.transmits() }
     }
 
     /// True when world direction `wi` is on a side the surface can send light to, with the
@@ -291,30 +333,30 @@ impl ShadingPoint {
         (above || self.transmits) && above == (local.z > 0.0)
     }
 
-    /// f(wo, wi)·|cos θi| for world directions.
+    /// f(wo, wi)·|cos θi| for world direction `wi`.
     #[inline]
-    pub fn eval_cos(&self, wo: Vec3A, wi: Vec3A) -> Rgb {
+    pub fn eval_cos(&self, wi: Vec3A) -> Rgb {
         let li = self.frame.to_local(wi);
         if !self.allows(wi, li) {
             return Rgb::ZERO;
         }
-        self.bsdf.eval(self.frame.to_local(wo), li) * li.z.abs()
+        self.bsdf.eval(li) * li.z.abs()
     }
 
     /// Density of sampling world direction `wi`.
     #[inline]
-    pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
+    pub fn pdf(&self, wi: Vec3A) -> f32 {
         let li = self.frame.to_local(wi);
         if !self.allows(wi, li) {
             return 0.0;
         }
-        self.bsdf.pdf(self.frame.to_local(wo), li)
+        self.bsdf.pdf(li)
     }
 
     /// Samples a world direction.
     #[inline]
-    pub fn sample(&self, wo: Vec3A, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
-        let s = self.bsdf.sample(self.frame.to_local(wo), u_lobe, u)?;
+    pub fn sample(&self, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        let s = self.bsdf.sample(u_lobe, u)?;
         let wi = self.frame.to_world(s.wi);
         self.allows(wi, s.wi).then_some(BsdfSample { wi, ..s })
     }

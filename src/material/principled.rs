@@ -156,6 +156,7 @@ pub struct Principled {
 }
 
 /// What depends on the outgoing direction: the lobes' weights and the choice between them.
+#[derive(Clone, Copy, Debug)]
 struct View {
     coat: f32,
     metal: Rgb,
@@ -338,44 +339,82 @@ impl Principled {
         wo.z > 0.0 && (wi.z > 0.0 || (wi.z < 0.0 && self.glass.is_some()))
     }
 
+    /// The model seen from `wo`: its lobe weights, which depend on μo alone, computed once
+    /// for every query that follows (a shading point asks for a sample, a value and a
+    /// density from the same `wo`; each used to recompute them, with five table lookups).
+    #[inline]
+    pub fn at(&self, wo: Vec3A) -> PrincipledAt {
+        PrincipledAt { model: *self, wo, view: self.view(wo.z) }
+    }
+
     /// BSDF value (without the cosine).
     #[inline]
     pub fn eval(&self, wo: Vec3A, wi: Vec3A) -> Rgb {
-        if !self.reaches(wo, wi) {
-            return Rgb::ZERO;
-        }
-        self.eval_view(&self.view(wo.z), wo, wi)
+        self.at(wo).eval(wi)
     }
 
     /// Solid-angle density of [`Principled::sample`].
     #[inline]
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
-        if !self.reaches(wo, wi) {
-            return 0.0;
-        }
-        self.pdf_view(&self.view(wo.z), wo, wi)
+        self.at(wo).pdf(wi)
     }
 
     /// Picks the glossy or the diffuse lobe with `u_lobe`, then a direction with `u`.
     #[inline]
     pub fn sample(&self, wo: Vec3A, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        self.at(wo).sample(u_lobe, u)
+    }
+}
+
+/// A [`Principled`] model seen from one outgoing direction `wo` (local frame, z up).
+#[derive(Clone, Copy, Debug)]
+pub struct PrincipledAt {
+    model: Principled,
+    wo: Vec3A,
+    view: View,
+}
+
+impl PrincipledAt {
+    /// BSDF value (without the cosine) towards `wi`.
+    #[inline]
+    pub fn eval(&self, wi: Vec3A) -> Rgb {
+        let (m, wo) = (&self.model, self.wo);
+        if !m.reaches(wo, wi) {
+            return Rgb::ZERO;
+        }
+        m.eval_view(&self.view, wo, wi)
+    }
+
+    /// Solid-angle density of [`PrincipledAt::sample`] at `wi`.
+    #[inline]
+    pub fn pdf(&self, wi: Vec3A) -> f32 {
+        let (m, wo) = (&self.model, self.wo);
+        if !m.reaches(wo, wi) {
+            return 0.0;
+        }
+        m.pdf_view(&self.view, wo, wi)
+    }
+
+    /// Picks the glossy or the diffuse lobe with `u_lobe`, then a direction with `u`.
+    #[inline]
+    pub fn sample(&self, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        let (m, wo, v) = (&self.model, self.wo, &self.view);
         if wo.z <= 0.0 {
             return None;
         }
-        let v = self.view(wo.z);
         let reflect = |g: &Ggx| {
             let h = g.sample_visible_normal(wo, u);
             2.0 * wo.dot(h) * h - wo
         };
         let glass_from = v.p_coat + v.p_glossy;
         let wi = match (u_lobe < v.p_coat, u_lobe < glass_from, u_lobe < glass_from + v.p_glass) {
-            (true, _, _) => reflect(&self.coat?.ggx),
-            (_, true, _) => reflect(&self.ggx),
+            (true, _, _) => reflect(&m.coat?.ggx),
+            (_, true, _) => reflect(&m.ggx),
             (_, _, true) => {
                 // The rest of the lobe number decides between reflection and refraction.
                 // A direction on the wrong side for its lobe is dropped, as Cycles does.
-                let g = self.glass?;
-                let h = self.ggx.sample_visible_normal(wo, u);
+                let g = m.glass?;
+                let h = m.ggx.sample_visible_normal(wo, u);
                 let f = fresnel::dielectric(wo.dot(h), g.eta);
                 let reflected = 2.0 * wo.dot(h) * h - wo;
                 if (u_lobe - glass_from) / v.p_glass < g.reflect_probability(f) {
@@ -388,13 +427,13 @@ impl Principled {
             }
             _ => square_to_cosine_hemisphere(u),
         };
-        if !self.reaches(wo, wi) {
+        if !m.reaches(wo, wi) {
             return None;
         }
-        let pdf = self.pdf_view(&v, wo, wi);
+        let pdf = m.pdf_view(v, wo, wi);
         if !(pdf > 0.0) {
             return None;
         }
-        Some(BsdfSample { wi, weight: self.eval_view(&v, wo, wi) * (wi.z.abs() / pdf), pdf })
+        Some(BsdfSample { wi, weight: m.eval_view(v, wo, wi) * (wi.z.abs() / pdf), pdf })
     }
 }
