@@ -2,14 +2,15 @@
 """Does the default sampler win at equal time? `myriad compare` on every shipped scene.
 
     python3 tools/equal_time.py [--time 2] [--seeds 2] [--resolution 160x120]
-        [--reference-spp 512] [--out target/equal-time] [--also cells] [SCENE ...]
+        [--reference-spp 512] [--out target/equal-time] [--also local] [SCENE ...]
 
-Runs `myriad compare SCENE --samplers uniform,power,tree --time T --seeds K` (the reference
+Runs `myriad compare SCENE --samplers uniform,power,tree,cells --time T --seeds K` (the reference
 rendered once with `tree` at `--reference-spp` and cached per scene) on `scenes/*.ron`
 (except the 102 400-lamp grid, whose uniform runs say little in seconds) and the Blender
 exports in `tests/data/blender/`, or on the scenes given, and prints each sampler's
-efficiency (1 / (relMSE · seconds), mean over the seeds) and the default's ratio to the best
-of `uniform` and `power`; `--also S,...` adds samplers and each one's ratio to `tree`. Only
+efficiency (1 / (relMSE · seconds), mean over the seeds), the default's (`cells`) ratio to the
+best of `uniform` and `power`, and its ratio to `tree`; `--also S,...` adds samplers and each
+one's ratio to `tree`. Only
 the Python standard library is used.
 """
 
@@ -20,7 +21,8 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-SAMPLERS = ["uniform", "power", "tree"]
+DEFAULT = "cells"
+SAMPLERS = ["uniform", "power", "tree", DEFAULT]
 
 
 def default_scenes():
@@ -43,8 +45,9 @@ def main():
     samplers = SAMPLERS + also
     if not Path(args.myriad).exists():
         sys.exit(f"{args.myriad} is missing: cargo build --release")
-    rows = ["| scene | lights | " + " | ".join(samplers) + " | tree ÷ best other |"
-            + "".join(f" {s} ÷ tree |" for s in also), "|---|---:|" + "---:|" * (len(samplers) + 1 + len(also))]
+    ratios = [DEFAULT] + also
+    rows = ["| scene | lights | " + " | ".join(samplers) + f" | {DEFAULT} ÷ best of uniform, power |"
+            + "".join(f" {s} ÷ tree |" for s in ratios), "|---|---:|" + "---:|" * (len(samplers) + 1 + len(ratios))]
     for scene in args.scenes or default_scenes():
         out = args.out / scene.stem
         cmd = [args.myriad, "compare", str(scene), "--samplers", ",".join(samplers), "--time", args.time,
@@ -55,9 +58,9 @@ def main():
         eff = {s["sampler"]: s["efficiency"]["mean"] for s in report["samplers"]}
         info = subprocess.run([args.myriad, "info", str(scene)], capture_output=True, text=True).stdout
         lights = next((l.split()[1] for l in info.splitlines() if l.startswith("lights")), "?")
-        ratio = eff["tree"] / max(eff["uniform"], eff["power"])
+        ratio = eff[DEFAULT] / max(eff["uniform"], eff["power"])
         rows.append(f"| {scene.name} | {lights} | " + " | ".join(f"{eff[s]:.3g}" for s in samplers) + f" | {ratio:.2f} |"
-                    + "".join(f" {eff[s] / eff['tree']:.2f} |" for s in also))
+                    + "".join(f" {eff[s] / eff['tree']:.2f} |" for s in ratios))
         print(rows[-1], flush=True)
     table = "\n".join(rows) + "\n"
     args.out.mkdir(parents=True, exist_ok=True)
