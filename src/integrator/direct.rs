@@ -67,8 +67,8 @@ fn light_contribution(
     unshadowed * weight
 }
 
-/// Direct light reflected towards the viewer of `sp` at surface point `p` (inside a volume of absorption
-/// `medium`, zero outside), estimated with `strategy`.
+/// Direct light reflected towards the viewer of `sp` at surface point `p` (inside a volume
+/// of absorption `medium`, zero outside), estimated with `strategy`.
 #[inline]
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_direct(
