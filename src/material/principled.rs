@@ -346,24 +346,6 @@ impl Principled {
     pub fn at(&self, wo: Vec3A) -> PrincipledAt {
         PrincipledAt { model: *self, wo, view: self.view(wo.z) }
     }
-
-    /// BSDF value (without the cosine).
-    #[inline]
-    pub fn eval(&self, wo: Vec3A, wi: Vec3A) -> Rgb {
-        self.at(wo).eval(wi)
-    }
-
-    /// Solid-angle density of [`Principled::sample`].
-    #[inline]
-    pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
-        self.at(wo).pdf(wi)
-    }
-
-    /// Picks the glossy or the diffuse lobe with `u_lobe`, then a direction with `u`.
-    #[inline]
-    pub fn sample(&self, wo: Vec3A, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
-        self.at(wo).sample(u_lobe, u)
-    }
 }
 
 /// A [`Principled`] model seen from one outgoing direction `wo` (local frame, z up).
