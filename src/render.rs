@@ -198,8 +198,8 @@ struct PassTally {
     cancelled: bool,
     rays: RayCounters,
     non_finite: u64,
-    /// Per band, in image order, what its light samples saw (when the strategy learns).
-    seen: Vec<Observations>,
+    /// What its light samples saw (when the strategy learns).
+    seen: Option<Observations>,
 }
 
 /// Adds samples `first..first+count` of every pixel to `film`; with `learning`, keeps what
@@ -220,11 +220,12 @@ fn render_pass(
     let called_off = || cancel.is_some_and(|c| c.load(Ordering::Relaxed));
     let size = settings.resolution;
     let bands: Vec<_> = film.bands_mut(ROWS_PER_BAND).collect();
-    let results: Vec<(Tally, u64)> = bands
+    // Each worker sums its bands' counts and observations; every sum is of integers, so the
+    // totals do not depend on how rayon splits the bands.
+    let empty = || (Tally { seen: learning.then(Observations::default), ..Tally::default() }, 0u64);
+    let (tally, bad) = bands
         .into_par_iter()
-        .map(|(row0, pixels, mut aovs)| {
-            let mut tally = Tally { seen: learning.then(Observations::default), ..Tally::default() };
-            let mut bad = 0u64;
+        .fold(empty, |(mut tally, mut bad), (row0, pixels, mut aovs)| {
             if interrupt::requested() == Stop::Now {
                 return (tally, bad);
             }
@@ -254,15 +255,9 @@ fn render_pass(
             }
             (tally, bad)
         })
-        .collect();
+        .reduce(empty, |(a, bad_a), (b, bad_b)| (a.merge(b), bad_a + bad_b));
     film.add_spp(count);
-    let mut pass = PassTally { cancelled: called_off(), rays: RayCounters::default(), non_finite: 0, seen: Vec::new() };
-    for (tally, bad) in results {
-        pass.rays.add(&tally.rays);
-        pass.non_finite += bad;
-        pass.seen.extend(tally.seen);
-    }
-    pass
+    PassTally { cancelled: called_off(), rays: tally.rays, non_finite: bad, seen: tally.seen }
 }
 
 /// The size of the next pass, or `None` when the budget is spent. `done` samples per pixel
@@ -298,7 +293,7 @@ fn next_pass(budget: Budget, done: u32, per_spp: Option<Duration>, elapsed: Dura
 /// A strategy that learns, and what its light samples saw since it last learned.
 struct Learner {
     strategy: LightStrategy,
-    pending: Vec<Observations>,
+    pending: Observations,
 }
 
 impl Learner {
@@ -310,8 +305,10 @@ impl Learner {
     /// Takes a pass's observations; learns from everything since the last time when the pass
     /// ended at a power of two (within [`LEARN_UNTIL`]), so the state is a function of the
     /// samples alone, not of how passes split them.
-    fn after_pass(&mut self, seen: Vec<Observations>, end: u32) {
-        self.pending.extend(seen);
+    fn after_pass(&mut self, seen: Option<Observations>, end: u32) {
+        if let Some(seen) = seen {
+            self.pending.merge(seen);
+        }
         if end.is_power_of_two() && end <= LEARN_UNTIL {
             self.strategy.learn(std::mem::take(&mut self.pending));
         }
@@ -358,7 +355,8 @@ impl<'a> Progressive<'a> {
     /// starting past 0 first trains a learning strategy on the samples before it.
     pub fn new(scene: &'a Scene, strategy: &'a LightStrategy, settings: &RenderSettings) -> Self {
         let offset = settings.budget.fixed().map_or(0, |f| f.0);
-        let mut learner = strategy.fresh_learner().map(|strategy| Learner { strategy, pending: Vec::new() });
+        let mut learner =
+            strategy.fresh_learner().map(|strategy| Learner { strategy, pending: Observations::default() });
         let mut rays = RayCounters::default();
         if let Some(l) = learner.as_mut().filter(|_| offset > 0) {
             rays.add(&l.train(scene, settings, offset.min(LEARN_UNTIL)));

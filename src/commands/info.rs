@@ -23,8 +23,8 @@ pub struct InfoReport {
 /// Loads and builds the scene and its light tree, and gathers their statistics.
 pub fn info(path: Option<&Path>, options: &SceneOptions) -> Result<InfoReport> {
     let loaded = load_scene(path, options)?;
-    let learned =
-        (!loaded.scene.lights.is_empty()).then(|| LearnedSampler::new(&loaded.scene.lights, loaded.scene.radius));
+    let learned = (!loaded.scene.lights.is_empty())
+        .then(|| LearnedSampler::new(&loaded.scene.lights, loaded.scene.center, loaded.scene.radius));
     let (tree, learned) = (learned.as_ref().map(|l| l.tree().stats()), learned.map(|l| l.layout()));
     Ok(InfoReport { loaded, tree, learned })
 }

@@ -27,6 +27,21 @@ pub struct RayCounters {
     pub shadow_rays: u64,
 }
 
+impl Tally {
+    /// Adds another worker's tally (what its light samples saw merged into this one's).
+    pub fn merge(mut self, other: Tally) -> Tally {
+        self.rays.add(&other.rays);
+        self.seen = match (self.seen, other.seen) {
+            (Some(mut a), Some(b)) => {
+                a.merge(b);
+                Some(a)
+            }
+            (a, b) => a.or(b),
+        };
+        self
+    }
+}
+
 impl RayCounters {
     /// Adds another worker's counts.
     pub fn add(&mut self, other: &RayCounters) {

@@ -3,7 +3,8 @@
 //! The tree weighs a cluster by power, distance and orientation and cannot see what stands
 //! between it and the point (Vévoda et al. 2018 learn that online; this is a cheap CPU form
 //! of it). Space is cut into cells (a grid of [`CELLS_PER_DIAMETER`] over the scene's
-//! diameter, times six normal directions); for each cell and each cluster of the tree's
+//! diameter, times six normal directions, [`MAX_CELLS`] in all, looked up by index); for
+//! each cell and each cluster of the tree's
 //! first [`LEVELS`] levels ([`Frontier`]), every light sample's unshadowed contribution `c`
 //! (luminance of f·Le·G / (pmf·pdf)) and whether its shadow ray got through are summed.
 //! A top node's child k then gets the factor
@@ -21,9 +22,9 @@
 //!
 //! **Deterministic and mergeable.** The factors change only between passes, at sample
 //! counts 1, 2, 4, … up to [`LEARN_UNTIL`] per pixel, from every sample before that count;
-//! observations are summed per band of rows in fixed point, so however the samples were
-//! grouped into passes and bands the sums are the same bits, and the image depends neither
-//! on the thread count nor on the pass sizes. Samples from [`LEARN_UNTIL`] on all use the
+//! observations are summed in fixed point, so however the samples were grouped (by worker,
+//! by pass) and in whatever order the groups are merged the sums are the same bits, and the
+//! image depends neither on the thread count nor on the pass sizes. Samples from [`LEARN_UNTIL`] on all use the
 //! factors learned from samples `0..LEARN_UNTIL`: a render of samples `a..b` needs exactly
 //! that state when `a ≥ LEARN_UNTIL` (samples `0..LEARN_UNTIL` rendered first, their
 //! image discarded), and for `a` below it the states at each power of two up to `b`.
@@ -37,6 +38,7 @@ use super::tree::{Frontier, LightTree, Reweight, WIDTH};
 use super::{LightSampler, SampledLight, ShadingContext};
 use crate::light::{Light, LightId};
 use crate::math::Fixed;
+use crate::math::Vec3A;
 use crate::sampling::fmix64;
 
 /// Levels of the tree whose choices are learned (up to 4³ = 64 clusters).
@@ -52,10 +54,17 @@ pub const LEARN_UNTIL: u32 = 16;
 /// Children whose factors differ by less than this ratio keep the tree's weights: nothing
 /// worth the lost shortcut (the tree's uniform ends) was learned there.
 pub const FLAT_FACTORS: f32 = 1.5;
-/// Most cells learned; samples in further cells use the tree's own weights.
-pub const MAX_CELLS: usize = 1 << 16;
+/// Cells along each axis of the grid over the scene's bounding sphere (its diameter is
+/// [`CELLS_PER_DIAMETER`] cells, and a point on the sphere may round up one more).
+const GRID: usize = CELLS_PER_DIAMETER as usize + 1;
+/// Normal bins of a cell ([`super::normal_bin`]).
+const BINS: usize = 7;
+/// Cells of the grid: the most a sampler can learn, which bounds its memory.
+pub const MAX_CELLS: usize = GRID * GRID * GRID * BINS;
+/// Marks a cell without learned factors in [`Factors::rows`].
+const UNLEARNED: u32 = u32::MAX;
 
-/// A hasher for keys that are already well mixed by [`fmix64`].
+/// A hasher for integer keys (cell indices): one [`fmix64`] of the key.
 #[derive(Default)]
 struct KeyHasher(u64);
 
@@ -95,37 +104,49 @@ impl Sums {
     }
 }
 
-/// What one band of rows saw during a pass: per cell (in the order first seen), sums per
-/// cluster.
+/// What some light samples saw (one worker's share of a pass, or several merged): per cell,
+/// sums per cluster. Merging is integer addition, so any grouping gives the same sums.
 #[derive(Debug)]
 pub struct Observations {
-    cells: Vec<(u64, Vec<Sums>)>,
+    cells: Vec<(u32, Vec<Sums>)>,
     index: KeyMap<u32>,
     /// The cell of the last observation and its place in `cells`: consecutive samples of a
     /// pixel mostly land in one cell, and then need no hashing.
-    last: (u64, u32),
+    last: (u32, u32),
 }
 
 impl Default for Observations {
     fn default() -> Self {
-        // No cell key is u64::MAX (the normal bin stays below 7 << 60).
-        Self { cells: Vec::new(), index: KeyMap::default(), last: (u64::MAX, 0) }
+        Self { cells: Vec::new(), index: KeyMap::default(), last: (UNLEARNED, 0) }
     }
 }
 
 impl Observations {
-    /// The sums of cell `key`, created with `clusters` entries when new.
+    /// The sums of cell `cell`, created with `clusters` entries when new.
     #[inline]
-    fn row(&mut self, key: u64, clusters: usize) -> &mut [Sums] {
-        if self.last.0 != key {
+    fn row(&mut self, cell: u32, clusters: usize) -> &mut [Sums] {
+        if self.last.0 != cell {
             let cells = &mut self.cells;
-            let at = *self.index.entry(key).or_insert_with(|| {
-                cells.push((key, vec![Sums::default(); clusters]));
+            let at = *self.index.entry(cell as u64).or_insert_with(|| {
+                cells.push((cell, vec![Sums::default(); clusters]));
                 (cells.len() - 1) as u32
             });
-            self.last = (key, at);
+            self.last = (cell, at);
         }
         &mut self.cells[self.last.1 as usize].1
+    }
+
+    /// Adds what `other` saw.
+    pub fn merge(&mut self, other: Observations) {
+        if self.cells.is_empty() {
+            *self = other;
+            return;
+        }
+        for (cell, sums) in other.cells {
+            for (total, s) in self.row(cell, sums.len()).iter_mut().zip(&sums) {
+                total.add(s);
+            }
+        }
     }
 }
 
@@ -158,8 +179,8 @@ pub struct LearnedLayout {
 /// The learned factors of every cell, frozen for a pass.
 #[derive(Debug, Default)]
 struct Factors {
-    /// Cell key → row.
-    rows: KeyMap<u32>,
+    /// Per cell: its row, or [`UNLEARNED`]; empty before anything is learned.
+    rows: Vec<u32>,
     /// Per row: `v_k` for every top node and child, `slot·WIDTH + k`.
     v: Vec<f32>,
 }
@@ -169,6 +190,8 @@ struct Factors {
 pub struct LearnedSampler {
     tree: Arc<LightTree>,
     frontier: Arc<Frontier>,
+    /// The grid's corner (the low corner of the scene's bounding cube).
+    corner: Vec3A,
     /// 1 / cell edge.
     inv_cell: f32,
     factors: Arc<Factors>,
@@ -178,16 +201,18 @@ pub struct LearnedSampler {
 }
 
 impl LearnedSampler {
-    /// The sampler over `lights` (non-empty) in a scene of radius `scene_radius`, with
-    /// nothing learned yet (it samples as the tree does).
-    pub fn new(lights: &[Light], scene_radius: f32) -> Self {
+    /// The sampler over `lights` (non-empty) in a scene bounded by the sphere of centre
+    /// `scene_centre` and radius `scene_radius`, with nothing learned yet (it samples as the
+    /// tree does).
+    pub fn new(lights: &[Light], scene_centre: Vec3A, scene_radius: f32) -> Self {
         let tree = LightTree::new(lights);
         let frontier = Frontier::new(&tree, LEVELS);
-        let inv_cell = CELLS_PER_DIAMETER / (2.0 * scene_radius.max(1e-6));
+        let radius = scene_radius.max(1e-6);
         Self {
             tree: Arc::new(tree),
             frontier: Arc::new(frontier),
-            inv_cell,
+            corner: scene_centre - Vec3A::splat(radius),
+            inv_cell: CELLS_PER_DIAMETER / (2.0 * radius),
             factors: Arc::default(),
             sums: KeyMap::default(),
             stats: LearnedStats::default(),
@@ -199,11 +224,14 @@ impl LearnedSampler {
         Self { factors: Arc::default(), sums: KeyMap::default(), stats: LearnedStats::default(), ..self.clone() }
     }
 
-    /// Bytes one cell takes: its sums (and map entry), and its factor row (and index entry).
+    /// Bytes one learned cell takes: its sums (and map entry), and its factor row.
     fn cell_bytes(&self) -> (usize, usize) {
         let sums = self.frontier.clusters as usize * std::mem::size_of::<Sums>() + 32;
-        (sums, self.frontier.runs.len() * WIDTH * 4 + 16)
+        (sums, self.frontier.runs.len() * WIDTH * 4)
     }
+
+    /// Bytes of the factors' index over the whole grid, once anything is learned.
+    const INDEX_BYTES: usize = MAX_CELLS * 4;
 
     /// Its clusters, cells and memory bound.
     pub fn layout(&self) -> LearnedLayout {
@@ -212,7 +240,7 @@ impl LearnedSampler {
             clusters: self.frontier.clusters,
             top_nodes: self.frontier.runs.len(),
             cell_size: 1.0 / self.inv_cell,
-            max_bytes: MAX_CELLS * (sums + factors),
+            max_bytes: MAX_CELLS * (sums + factors) + Self::INDEX_BYTES,
         }
     }
 
@@ -228,30 +256,33 @@ impl LearnedSampler {
 
     /// Bytes of tree, frontier, sums and factors.
     pub fn memory_bytes(&self) -> usize {
-        let (sums, factors) = self.cell_bytes();
+        let sums = self.cell_bytes().0;
         self.tree.stats().memory_bytes
             + self.frontier.memory_bytes()
             + self.sums.len() * sums
-            + self.factors.rows.len() * factors
+            + self.factors.v.len() * 4
+            + self.factors.rows.len() * 4
     }
 
-    /// The cell of a shading context: its grid position and the dominant axis and sign of
-    /// its normal (a seventh bin for points off surfaces).
+    /// The cell of a shading context: its place in the grid and the dominant axis and sign
+    /// of its normal (a seventh bin for points off surfaces); `None` outside the grid.
     #[inline]
-    fn key(&self, ctx: &ShadingContext) -> u64 {
-        const HALF: f32 = (1 << 19) as f32;
-        let q = (ctx.p * self.inv_cell).floor();
-        let coord = |x: f32| (x.clamp(-HALF, HALF - 1.0) + HALF) as u64;
-        let bin = super::normal_bin(ctx.n) as u64;
-        coord(q.x) | coord(q.y) << 20 | coord(q.z) << 40 | bin << 60
+    fn cell_of(&self, ctx: &ShadingContext) -> Option<u32> {
+        let q = ((ctx.p - self.corner) * self.inv_cell).floor();
+        let inside = q.cmpge(Vec3A::ZERO).all() && q.cmplt(Vec3A::splat(GRID as f32)).all();
+        let (x, y, z) = (q.x as usize, q.y as usize, q.z as usize);
+        inside.then(|| (((x * GRID + y) * GRID + z) * BINS + super::normal_bin(ctx.n)) as u32)
     }
 
     /// The learned factors at `ctx`, if its cell has any.
     #[inline]
     fn factors_at(&self, ctx: &ShadingContext) -> Option<&[f32]> {
-        let row = *self.factors.rows.get(&self.key(ctx))? as usize;
+        let row = *self.factors.rows.get(self.cell_of(ctx)? as usize)?;
+        if row == UNLEARNED {
+            return None;
+        }
         let width = self.frontier.runs.len() * WIDTH;
-        Some(&self.factors.v[row * width..(row + 1) * width])
+        Some(&self.factors.v[row as usize * width..][..width])
     }
 
     /// The reweighting of the tree at `ctx`: the defensive mixture with its cell's factors.
@@ -264,35 +295,28 @@ impl LearnedSampler {
     /// shadow ray got through.
     #[inline]
     pub fn observe(&self, seen: &mut Observations, ctx: &ShadingContext, light: LightId, c: f32, visible: bool) {
-        if !(c.is_finite() && c > 0.0) {
-            return;
-        }
+        let Some(cell) = self.cell_of(ctx).filter(|_| c.is_finite() && c > 0.0) else { return };
         let cluster = self.frontier.cluster[light.0 as usize] as usize;
-        let s = &mut seen.row(self.key(ctx), self.frontier.clusters as usize)[cluster];
+        let s = &mut seen.row(cell, self.frontier.clusters as usize)[cluster];
         let q = Fixed::of(c as f64, Fixed::SQUARE, Fixed::LIMIT);
         s.offered += q;
         s.arrived += if visible { q } else { 0 };
         s.n += 1;
     }
 
-    /// Learns from the bands' observations of one pass (in image order) and recomputes the
+    /// Learns from what the light samples since the last call saw and recomputes the
     /// factors every cell will sample with from now on.
-    pub fn learn(&mut self, bands: Vec<Observations>) {
+    pub fn learn(&mut self, seen: Observations) {
         let start = Instant::now();
-        for band in bands {
-            for (cell, sums) in band.cells {
-                if !self.sums.contains_key(&cell) && self.sums.len() >= MAX_CELLS {
-                    continue;
-                }
-                let row = self.sums.entry(cell).or_insert_with(|| vec![Sums::default(); sums.len()]);
-                for (total, s) in row.iter_mut().zip(&sums) {
-                    total.add(s);
-                    self.stats.samples += s.n as u64;
-                }
+        for (cell, sums) in seen.cells {
+            let row = self.sums.entry(cell as u64).or_insert_with(|| vec![Sums::default(); sums.len()]);
+            for (total, s) in row.iter_mut().zip(&sums) {
+                total.add(s);
+                self.stats.samples += s.n as u64;
             }
         }
         self.factors = Arc::new(self.compute_factors());
-        self.stats.cells = self.factors.rows.len();
+        self.stats.cells = self.factors.v.len() / (self.frontier.runs.len() * WIDTH);
         self.stats.learning_time += start.elapsed();
     }
 
@@ -301,7 +325,7 @@ impl LearnedSampler {
         let width = self.frontier.runs.len() * WIDTH;
         let mut cells: Vec<(&u64, &Vec<Sums>)> = self.sums.iter().collect();
         cells.sort_unstable_by_key(|(k, _)| **k);
-        let mut f = Factors { rows: KeyMap::default(), v: Vec::with_capacity(cells.len() * width) };
+        let mut f = Factors { rows: vec![UNLEARNED; MAX_CELLS], v: Vec::with_capacity(cells.len() * width) };
         let mut row = Vec::with_capacity(width);
         for (&cell, sums) in cells {
             row.clear();
@@ -320,7 +344,7 @@ impl LearnedSampler {
             }
             // A cell that learned nothing worth using samples as the tree does.
             if row.iter().any(|&x| x != 1.0) {
-                f.rows.insert(cell, (f.v.len() / width) as u32);
+                f.rows[cell as usize] = (f.v.len() / width) as u32;
                 f.v.extend_from_slice(&row);
             }
         }

@@ -199,7 +199,7 @@ impl LightStrategy {
             LightSamplerKind::Local => LightStrategy::One(AnyLightSampler::Local(LocalSampler::new(lights))),
             LightSamplerKind::Tree => LightStrategy::One(AnyLightSampler::Tree(LightTree::new(lights))),
             LightSamplerKind::Learned => {
-                LightStrategy::One(AnyLightSampler::Learned(LearnedSampler::new(lights, scene_radius)))
+                LightStrategy::One(AnyLightSampler::Learned(LearnedSampler::new(lights, scene_centre, scene_radius)))
             }
             LightSamplerKind::Cells if !cells::takes(lights.len()) => {
                 LightStrategy::One(AnyLightSampler::Tree(LightTree::new(lights)))
@@ -244,11 +244,11 @@ impl LightStrategy {
         self.learner().map(|l| LightStrategy::One(AnyLightSampler::Learned(l.fresh())))
     }
 
-    /// Learns from one pass's observations, band by band in image order (nothing to do for
-    /// a strategy that does not learn).
-    pub fn learn(&mut self, bands: Vec<Observations>) {
+    /// Learns from what the light samples since the last call saw (nothing to do for a
+    /// strategy that does not learn).
+    pub fn learn(&mut self, seen: Observations) {
         if let LightStrategy::One(AnyLightSampler::Learned(l)) = self {
-            l.learn(bands);
+            l.learn(seen);
         }
     }
 

@@ -231,7 +231,7 @@ fn one_sample_estimator_matches_the_sum_over_point_lights() {
 /// A `learned` sampler over `lights` after one pass of observations at `ctxs`, in which
 /// every light with `hidden(light)` was occluded and every other one got through.
 fn trained(lights: &[Light], ctxs: &[ShadingContext], hidden: &dyn Fn(&Light) -> bool) -> LearnedSampler {
-    let mut learned = LearnedSampler::new(lights, 10.0);
+    let mut learned = LearnedSampler::new(lights, Vec3A::ZERO, 10.0);
     let mut seen = Observations::default();
     for (i, ctx) in ctxs.iter().enumerate() {
         for k in 0..4000u64 {
@@ -241,7 +241,7 @@ fn trained(lights: &[Light], ctxs: &[ShadingContext], hidden: &dyn Fn(&Light) ->
             }
         }
     }
-    learned.learn(vec![seen]);
+    learned.learn(seen);
     learned
 }
 
@@ -256,7 +256,7 @@ fn learned_sampler_moves_samples_off_hidden_lights_and_keeps_its_defensive_floor
     };
     let learned = trained(&lights, &ctxs, &hidden);
     assert!(learned.stats().cells > 0 && learned.stats().samples > 0, "{:?}", learned.stats());
-    let tree = LearnedSampler::new(&lights, 10.0);
+    let tree = LearnedSampler::new(&lights, Vec3A::ZERO, 10.0);
     let floor = DEFENSIVE.powi(LEVELS as i32);
     let alpha = sidak(ctxs.len());
     let (mut moved, mut eligible) = (0, 0);
@@ -284,4 +284,23 @@ fn learned_sampler_moves_samples_off_hidden_lights_and_keeps_its_defensive_floor
         "the hidden lights kept their share at {} of {eligible} points",
         eligible - moved
     );
+}
+
+#[test]
+fn learned_sampler_outside_its_grid_samples_as_the_tree() {
+    // Trained to shun the x < 0 lights, it has nothing learned for points beyond the
+    // scene's bounding sphere (radius 10 here): there its pmf is the tree's, bit for bit.
+    let lights = mixed_lights(200);
+    let hidden = |l: &Light| {
+        let b = l.bounds();
+        !b.infinite && b.centroid().x < 0.0
+    };
+    let learned = trained(&lights, &contexts(12), &hidden);
+    let tree = LearnedSampler::new(&lights, Vec3A::ZERO, 10.0);
+    for p in [Vec3A::new(12.5, 0.0, 0.0), Vec3A::new(0.0, -30.0, 2.0), Vec3A::splat(1e9)] {
+        let ctx = ShadingContext { p, n: Vec3A::Y };
+        for l in 0..lights.len() as u32 {
+            assert_eq!(learned.cell(&ctx, LightId(l)), tree.cell(&ctx, LightId(l)), "light {l} at {p:?}");
+        }
+    }
 }
