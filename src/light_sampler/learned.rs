@@ -4,10 +4,11 @@
 //! between it and the point (Vévoda et al. 2018 learn that online; this is a cheap CPU form
 //! of it). Space is cut into cells (a grid of [`CELLS_PER_DIAMETER`] over the scene's
 //! diameter, times six normal directions, [`MAX_CELLS`] in all, looked up by index); for
-//! each cell and each cluster of the tree's
-//! first [`LEVELS`] levels ([`Frontier`]), every light sample's unshadowed contribution `c`
-//! (luminance of f·Le·G / (pmf·pdf)) and whether its shadow ray got through are summed.
-//! A top node's child k then gets the factor
+//! each cell and each cluster of the tree's first [`LEVELS`] levels ([`Frontier`]), every
+//! light sample's unshadowed contribution `c` (luminance of f·Le·G / (pmf·pdf)) and whether
+//! its shadow ray got through are summed. A cell where at least [`WORTH_LEARNING`] of that
+//! contribution arrived keeps the tree as it is (little to gain, and the tree's uniform
+//! shortcuts to keep); elsewhere a top node's child k gets the factor
 //!
 //! `v_k = (n·r + κ) / (n + κ)`, `r = Σ c·visible / Σ c` over the child's clusters,
 //!
@@ -24,8 +25,9 @@
 //! counts 1, 2, 4, … up to [`LEARN_UNTIL`] per pixel, from every sample before that count;
 //! observations are summed in fixed point, so however the samples were grouped (by worker,
 //! by pass) and in whatever order the groups are merged the sums are the same bits, and the
-//! image depends neither on the thread count nor on the pass sizes. Samples from [`LEARN_UNTIL`] on all use the
-//! factors learned from samples `0..LEARN_UNTIL`: a render of samples `a..b` needs exactly
+//! image depends neither on the thread count nor on the pass sizes. Samples from
+//! [`LEARN_UNTIL`] on all use the factors learned from samples `0..LEARN_UNTIL`: a render of
+//! samples `a..b` needs exactly
 //! that state when `a ≥ LEARN_UNTIL` (samples `0..LEARN_UNTIL` rendered first, their
 //! image discarded), and for `a` below it the states at each power of two up to `b`.
 
@@ -54,6 +56,13 @@ pub const LEARN_UNTIL: u32 = 16;
 /// Children whose factors differ by less than this ratio keep the tree's weights: nothing
 /// worth the lost shortcut (the tree's uniform ends) was learned there.
 pub const FLAT_FACTORS: f32 = 1.5;
+/// A cell whose light samples saw at least this share of their unshadowed contribution
+/// arrive samples as the tree does: perfect visibility would cut its samples' cost by at
+/// most a tenth, less than reweighting costs where the tree would have ended its descent
+/// with a uniform choice. Measured (160×120, 64 spp, 1 thread, paired): learned ÷ tree CPU
+/// on cornell-9x9 1.18 → 1.11 and on instanced_lamps.glb 1.03, relMSE unchanged there and
+/// on offices and rooms.
+pub const WORTH_LEARNING: f64 = 0.9;
 /// Cells along each axis of the grid over the scene's bounding sphere (its diameter is
 /// [`CELLS_PER_DIAMETER`] cells, and a point on the sphere may round up one more).
 const GRID: usize = CELLS_PER_DIAMETER as usize + 1;
@@ -328,6 +337,10 @@ impl LearnedSampler {
         let mut f = Factors { rows: vec![UNLEARNED; MAX_CELLS], v: Vec::with_capacity(cells.len() * width) };
         let mut row = Vec::with_capacity(width);
         for (&cell, sums) in cells {
+            let (arrived, offered) = sums.iter().fold((0, 0), |(a, o), s| (a + s.arrived, o + s.offered));
+            if arrived as f64 >= WORTH_LEARNING * offered as f64 {
+                continue;
+            }
             row.clear();
             for runs in self.frontier.runs.iter() {
                 let v = runs.map(|(a, b)| {
