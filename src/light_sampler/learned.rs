@@ -115,7 +115,7 @@ impl Sums {
 
 /// What some light samples saw (one worker's share of a pass, or several merged): per cell,
 /// sums per cluster. Merging is integer addition, so any grouping gives the same sums.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct Observations {
     cells: Vec<(u32, Vec<Sums>)>,
     index: KeyMap<u32>,
@@ -205,7 +205,7 @@ pub struct LearnedSampler {
     inv_cell: f32,
     factors: Arc<Factors>,
     /// Sums over every pass learned from, per cell: one entry per cluster.
-    sums: KeyMap<Vec<Sums>>,
+    sums: Observations,
     stats: LearnedStats,
 }
 
@@ -223,14 +223,14 @@ impl LearnedSampler {
             corner: scene_centre - Vec3A::splat(radius),
             inv_cell: CELLS_PER_DIAMETER / (2.0 * radius),
             factors: Arc::default(),
-            sums: KeyMap::default(),
+            sums: Observations::default(),
             stats: LearnedStats::default(),
         }
     }
 
     /// The same sampler with nothing learned: what each render starts from.
     pub fn fresh(&self) -> Self {
-        Self { factors: Arc::default(), sums: KeyMap::default(), stats: LearnedStats::default(), ..self.clone() }
+        Self { factors: Arc::default(), sums: Observations::default(), stats: LearnedStats::default(), ..self.clone() }
     }
 
     /// Bytes one learned cell takes: its sums (and map entry), and its factor row.
@@ -268,7 +268,7 @@ impl LearnedSampler {
         let sums = self.cell_bytes().0;
         self.tree.stats().memory_bytes
             + self.frontier.memory_bytes()
-            + self.sums.len() * sums
+            + self.sums.cells.len() * sums
             + self.factors.v.len() * 4
             + self.factors.rows.len() * 4
     }
@@ -317,13 +317,8 @@ impl LearnedSampler {
     /// factors every cell will sample with from now on.
     pub fn learn(&mut self, seen: Observations) {
         let start = Instant::now();
-        for (cell, sums) in seen.cells {
-            let row = self.sums.entry(cell as u64).or_insert_with(|| vec![Sums::default(); sums.len()]);
-            for (total, s) in row.iter_mut().zip(&sums) {
-                total.add(s);
-                self.stats.samples += s.n as u64;
-            }
-        }
+        self.stats.samples += seen.cells.iter().flat_map(|(_, sums)| sums).map(|s| s.n as u64).sum::<u64>();
+        self.sums.merge(seen);
         self.factors = Arc::new(self.compute_factors());
         self.stats.cells = self.factors.v.len() / (self.frontier.runs.len() * WIDTH);
         self.stats.learning_time += start.elapsed();
@@ -332,11 +327,11 @@ impl LearnedSampler {
     /// `v_k` of every cell's top nodes from the sums (see the module docs).
     fn compute_factors(&self) -> Factors {
         let width = self.frontier.runs.len() * WIDTH;
-        let mut cells: Vec<(&u64, &Vec<Sums>)> = self.sums.iter().collect();
-        cells.sort_unstable_by_key(|(k, _)| **k);
+        let mut cells: Vec<&(u32, Vec<Sums>)> = self.sums.cells.iter().collect();
+        cells.sort_unstable_by_key(|(cell, _)| *cell);
         let mut f = Factors { rows: vec![UNLEARNED; MAX_CELLS], v: Vec::with_capacity(cells.len() * width) };
         let mut row = Vec::with_capacity(width);
-        for (&cell, sums) in cells {
+        for (cell, sums) in cells {
             let (arrived, offered) = sums.iter().fold((0, 0), |(a, o), s| (a + s.arrived, o + s.offered));
             if arrived as f64 >= WORTH_LEARNING * offered as f64 {
                 continue;
@@ -357,7 +352,7 @@ impl LearnedSampler {
             }
             // A cell that learned nothing worth using samples as the tree does.
             if row.iter().any(|&x| x != 1.0) {
-                f.rows[cell as usize] = (f.v.len() / width) as u32;
+                f.rows[*cell as usize] = (f.v.len() / width) as u32;
                 f.v.extend_from_slice(&row);
             }
         }

@@ -228,6 +228,15 @@ fn one_sample_estimator_matches_the_sum_over_point_lights() {
     }
 }
 
+/// Whether a light lies on the x < `x` side (behind a wall there, for the `learned` tests);
+/// directional lights never do.
+fn left_of(x: f32) -> impl Fn(&Light) -> bool {
+    move |l: &Light| {
+        let b = l.bounds();
+        !b.infinite && b.centroid().x < x
+    }
+}
+
 /// A `learned` sampler over `lights` after one pass of observations at `ctxs`, in which
 /// every light with `hidden(light)` was occluded and every other one got through.
 fn trained(lights: &[Light], ctxs: &[ShadingContext], hidden: &dyn Fn(&Light) -> bool) -> LearnedSampler {
@@ -250,10 +259,7 @@ fn learned_sampler_moves_samples_off_hidden_lights_and_keeps_its_defensive_floor
     let lights = mixed_lights(200);
     let ctxs = contexts(12);
     // Lights on the x < 0 side are behind a wall from everywhere.
-    let hidden = |l: &Light| {
-        let b = l.bounds();
-        !b.infinite && b.centroid().x < 0.0
-    };
+    let hidden = left_of(0.0);
     let learned = trained(&lights, &ctxs, &hidden);
     assert!(learned.stats().cells > 0 && learned.stats().samples > 0, "{:?}", learned.stats());
     let tree = LearnedSampler::new(&lights, Vec3A::ZERO, 10.0);
@@ -291,10 +297,7 @@ fn learned_sampler_outside_its_grid_samples_as_the_tree() {
     // Trained to shun the x < 0 lights, it has nothing learned for points beyond the
     // scene's bounding sphere (radius 10 here): there its pmf is the tree's, bit for bit.
     let lights = mixed_lights(200);
-    let hidden = |l: &Light| {
-        let b = l.bounds();
-        !b.infinite && b.centroid().x < 0.0
-    };
+    let hidden = left_of(0.0);
     let learned = trained(&lights, &contexts(12), &hidden);
     let tree = LearnedSampler::new(&lights, Vec3A::ZERO, 10.0);
     for p in [Vec3A::new(12.5, 0.0, 0.0), Vec3A::new(0.0, -30.0, 2.0), Vec3A::splat(1e9)] {
@@ -312,10 +315,7 @@ fn learned_sampler_keeps_the_tree_where_little_is_hidden() {
     // those cells have nothing worth learning and sample exactly as the tree does.
     let lights = mixed_lights(200);
     let ctxs = contexts(60);
-    let hidden = |l: &Light| {
-        let b = l.bounds();
-        !b.infinite && b.centroid().x < -3.4
-    };
+    let hidden = left_of(-3.4);
     let learned = trained(&lights, &ctxs, &hidden);
     let tree = LearnedSampler::new(&lights, Vec3A::ZERO, 10.0);
     let mut kept = 0;
