@@ -13,6 +13,7 @@
 
 use std::cell::RefCell;
 
+use super::order::SpatialOrder;
 use super::{LightSampler, SampledLight, ShadingContext};
 use crate::light::{BoundsPacket, Light, LightBounds, LightId};
 use crate::math::distribution::{RANGE, Split, probability};
@@ -27,53 +28,21 @@ thread_local! {
 pub struct LocalSampler {
     /// Bounds in Morton order, four per packet.
     packets: Vec<BoundsPacket>,
-    /// Slot (Morton position) → light.
-    order: Vec<u32>,
-    /// Light → slot.
-    slot: Vec<u32>,
-}
-
-/// Spreads the low 10 bits of `v` to every third bit.
-fn spread3(mut v: u32) -> u32 {
-    v &= 0x3ff;
-    v = (v | (v << 16)) & 0x0300_00ff;
-    v = (v | (v << 8)) & 0x0300_f00f;
-    v = (v | (v << 4)) & 0x030c_30c3;
-    (v | (v << 2)) & 0x0924_9249
+    /// Slot (Morton position) ↔ light.
+    order: SpatialOrder,
 }
 
 impl LocalSampler {
     /// A sampler over `lights`.
     pub fn new(lights: &[Light]) -> Self {
         let bounds: Vec<LightBounds> = lights.iter().map(Light::bounds).collect();
-        let (mut lo, mut hi) = (glam::Vec3A::splat(f32::MAX), glam::Vec3A::splat(f32::MIN));
-        for b in bounds.iter().filter(|b| !b.infinite) {
-            lo = lo.min(b.centroid());
-            hi = hi.max(b.centroid());
-        }
-        let scale = 1023.0 / (hi - lo).max(glam::Vec3A::splat(1e-12));
-        // Directional lights sort last.
-        let morton = |b: &LightBounds| -> u64 {
-            if b.infinite {
-                return u64::MAX;
-            }
-            let q = ((b.centroid() - lo) * scale).max(glam::Vec3A::ZERO).min(glam::Vec3A::splat(1023.0));
-            (spread3(q.x as u32) | (spread3(q.y as u32) << 1) | (spread3(q.z as u32) << 2)) as u64
-        };
-        let mut order: Vec<u32> = (0..lights.len() as u32).collect();
-        order.sort_by_key(|&i| (morton(&bounds[i as usize]), i));
-        let mut slot = vec![0u32; lights.len()];
-        for (s, &l) in order.iter().enumerate() {
-            slot[l as usize] = s as u32;
-        }
-        let sorted: Vec<LightBounds> = order.iter().map(|&l| bounds[l as usize]).collect();
-        Self { packets: sorted.chunks(4).map(BoundsPacket::new).collect(), order, slot }
+        let order = SpatialOrder::of(&bounds);
+        Self { packets: order.arrange(&bounds).chunks(4).map(BoundsPacket::new).collect(), order }
     }
 
     /// Bytes of the light table and the per-thread scratch it keeps.
     pub fn memory_bytes(&self) -> usize {
-        self.packets.capacity() * std::mem::size_of::<BoundsPacket>()
-            + (self.order.capacity() + self.slot.capacity()) * 4
+        self.packets.capacity() * std::mem::size_of::<BoundsPacket>() + self.order.memory_bytes()
     }
 
     /// Number of lights.
@@ -84,13 +53,13 @@ impl LocalSampler {
     /// The light in slot (Morton position) `slot`.
     #[inline]
     pub fn light_at(&self, slot: usize) -> LightId {
-        LightId(self.order[slot])
+        self.order.light_at(slot)
     }
 
     /// The slot (Morton position) of `light`.
     #[inline]
     pub fn slot_of(&self, light: LightId) -> usize {
-        self.slot[light.0 as usize] as usize
+        self.order.slot_of(light)
     }
 
     /// Fills `out` with every light's importance at `ctx`, in slot (Morton) order.
@@ -109,13 +78,13 @@ impl LightSampler for LocalSampler {
             let u = u as u128;
             w.iter().enumerate().find_map(|(slot, &x)| {
                 let (start, end) = split.next(x);
-                (u < end).then(|| SampledLight { light: LightId(self.order[slot]), pmf: probability(end - start) })
+                (u < end).then(|| SampledLight { light: self.order.light_at(slot), pmf: probability(end - start) })
             })
         })
     }
 
     fn cell(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
-        let slot = self.slot[light.0 as usize] as usize;
+        let slot = self.order.slot_of(light);
         SCRATCH.with_borrow_mut(|w| {
             self.importances(ctx, w);
             let Some(mut split) = Split::new(RANGE, w.iter().copied()) else { return (0, 0) };

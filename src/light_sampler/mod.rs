@@ -10,6 +10,7 @@
 mod cells;
 mod learned;
 mod local;
+mod order;
 mod power;
 mod tree;
 mod uniform;
@@ -161,7 +162,7 @@ impl AnyLightSampler {
     /// Bytes of sampling tables held.
     pub fn memory_bytes(&self) -> usize {
         match self {
-            AnyLightSampler::Uniform(_) => 0,
+            AnyLightSampler::Uniform(s) => s.memory_bytes(),
             AnyLightSampler::Power(s) => s.memory_bytes(),
             AnyLightSampler::Local(s) => s.memory_bytes(),
             AnyLightSampler::Tree(s) => s.stats().memory_bytes,
@@ -190,9 +191,7 @@ impl LightStrategy {
         }
         match kind {
             LightSamplerKind::All => LightStrategy::All,
-            LightSamplerKind::Uniform => {
-                LightStrategy::One(AnyLightSampler::Uniform(UniformSampler::new(lights.len())))
-            }
+            LightSamplerKind::Uniform => LightStrategy::One(AnyLightSampler::Uniform(UniformSampler::new(lights))),
             LightSamplerKind::Power => {
                 LightStrategy::One(AnyLightSampler::Power(PowerSampler::new(lights, scene_radius)))
             }

@@ -4,7 +4,9 @@
 //! the estimate is wrong (pbrt drops them). Every light here gets at least a floor of 1e-6
 //! of the mean power, so nothing that can contribute has pmf 0 (and `Distribution1D` gives
 //! every positive weight at least one of the 2⁶⁴ values, however many lights there are).
+//! The CDF runs over the lights in their [`SpatialOrder`], as `uniform` chooses.
 
+use super::order::SpatialOrder;
 use super::{LightSampler, SampledLight, ShadingContext};
 use crate::light::{Light, LightId};
 use crate::math::distribution::Distribution1D;
@@ -12,7 +14,9 @@ use crate::math::distribution::Distribution1D;
 /// Picks lights with probability proportional to their power.
 #[derive(Clone, Debug)]
 pub struct PowerSampler {
+    /// Over the lights' slots.
     distribution: Distribution1D,
+    order: SpatialOrder,
 }
 
 impl PowerSampler {
@@ -22,14 +26,15 @@ impl PowerSampler {
         let mean = powers.iter().map(|&p| p as f64).sum::<f64>() / powers.len().max(1) as f64;
         let floor = if mean > 0.0 { (mean * 1e-6) as f32 } else { 1.0 };
         let weights: Vec<f32> = powers.into_iter().map(|p| p.max(floor)).collect();
-        let distribution =
-            Distribution1D::new(&weights).expect("every weight is at least the floor, which is positive");
-        Self { distribution }
+        let order = SpatialOrder::new(lights);
+        let distribution = Distribution1D::new(&order.arrange(&weights))
+            .expect("every weight is at least the floor, which is positive");
+        Self { distribution, order }
     }
 
-    /// Bytes of the CDF.
+    /// Bytes of the CDF and the light order.
     pub fn memory_bytes(&self) -> usize {
-        self.distribution.memory_bytes()
+        self.distribution.memory_bytes() + self.order.memory_bytes()
     }
 }
 
@@ -37,11 +42,11 @@ impl LightSampler for PowerSampler {
     #[inline]
     fn sample(&self, _ctx: &ShadingContext, u: u64) -> Option<SampledLight> {
         let s = self.distribution.sample(u);
-        Some(SampledLight { light: LightId(s.index as u32), pmf: s.pmf })
+        Some(SampledLight { light: self.order.light_at(s.index), pmf: s.pmf })
     }
 
     #[inline]
     fn cell(&self, _ctx: &ShadingContext, light: LightId) -> (u128, u128) {
-        self.distribution.cell(light.0 as usize)
+        self.distribution.cell(self.order.slot_of(light))
     }
 }
