@@ -13,16 +13,20 @@ use crate::math::distribution::{RANGE, even_cell, even_pick, probability};
 /// Picks each of `n` lights with probability 1/n.
 #[derive(Clone, Debug)]
 pub struct UniformSampler {
-    n: u32,
     order: SpatialOrder,
 }
 
 impl UniformSampler {
     /// A sampler over `lights` (1 to 2³² − 1 of them).
     pub fn new(lights: &[Light]) -> Self {
-        let n = lights.len();
-        assert!(n > 0 && n <= u32::MAX as usize, "uniform sampler needs 1..2^32 lights");
-        Self { n: n as u32, order: SpatialOrder::new(lights) }
+        assert!(!lights.is_empty() && lights.len() <= u32::MAX as usize, "uniform sampler needs 1..2^32 lights");
+        Self { order: SpatialOrder::new(lights) }
+    }
+
+    /// Number of lights.
+    #[inline]
+    fn n(&self) -> u32 {
+        self.order.len() as u32
     }
 
     /// Bytes of its light order.
@@ -34,14 +38,14 @@ impl UniformSampler {
 impl LightSampler for UniformSampler {
     #[inline]
     fn sample(&self, _ctx: &ShadingContext, u: u64) -> Option<SampledLight> {
-        let i = even_pick(u as u128, self.n, RANGE);
-        let (start, end) = even_cell(i, self.n, RANGE);
+        let i = even_pick(u as u128, self.n(), RANGE);
+        let (start, end) = even_cell(i, self.n(), RANGE);
         Some(SampledLight { light: self.order.light_at(i as usize), pmf: probability(end - start) })
     }
 
     #[inline]
     fn cell(&self, _ctx: &ShadingContext, light: LightId) -> (u128, u128) {
-        debug_assert!(light.0 < self.n);
-        even_cell(self.order.slot_of(light) as u32, self.n, RANGE)
+        debug_assert!(light.0 < self.n());
+        even_cell(self.order.slot_of(light) as u32, self.n(), RANGE)
     }
 }
