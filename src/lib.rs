@@ -30,6 +30,7 @@
 pub mod camera;
 pub mod commands;
 pub mod compare;
+pub mod cpu;
 pub mod error;
 pub mod film;
 pub mod fingerprint;

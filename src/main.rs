@@ -571,6 +571,14 @@ fn tell(text: impl std::fmt::Display) {
 }
 
 fn main() -> ExitCode {
+    // First, before any code built with the extensions it checks for.
+    myriad::cpu::require_build_features();
+    start()
+}
+
+/// Everything after the CPU check, kept out of `main` so that none of it is scheduled before.
+#[inline(never)]
+fn start() -> ExitCode {
     if let Err(e) = myriad::interrupt::install() {
         tell(format!("warning: Ctrl-C will stop myriad without cleaning up ({e})"));
     }
