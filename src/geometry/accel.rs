@@ -5,8 +5,8 @@
 //! that several instances share, in object space), [`Instance`] placements, a top-level
 //! CWBVH over the instances when there is more than one, closest-hit and occlusion queries
 //! with an acceptance test (alpha cut-outs). Medium build preset: PLOC + reinsertion, the
-//! best build/trace trade-off measured here (docs/conventions.md). This is the only file that
-//! imports obvhs.
+//! best build/trace trade-off measured here (docs/conventions.md). This file and the traversal
+//! it runs (`traverse.rs`) are the only ones that import obvhs.
 //!
 //! A BLAS stores its triangles in BVH order ("direct layout"), so the slot obvhs hands to the
 //! intersection closure is the triangle index; callers reorder per-triangle data with the
@@ -20,11 +20,10 @@ use obvhs::{
     aabb::Aabb,
     cwbvh::CwBvh,
     cwbvh::builder::{build_cwbvh, build_cwbvh_from_tris},
-    ray::RayHit,
     triangle::Triangle,
 };
 
-use super::Ray;
+use super::{Ray, traverse};
 use crate::math::{Mat3, Mat4, Vec3A};
 
 /// The raw result of a closest-hit query.
@@ -127,9 +126,8 @@ impl Blas {
     #[inline]
     fn closest(&self, ray: obvhs::ray::Ray, accept: &impl Fn(u32, f32, f32) -> bool) -> Option<(u32, f32, f32, f32)> {
         let bvh = self.bvh.as_ref()?;
-        let mut rh = RayHit::none();
         let mut bary = (0.0f32, 0.0f32);
-        let hit = bvh.ray_traverse(ray, &mut rh, |r, slot| {
+        let (slot, t) = traverse::closest(bvh, ray, |r, slot| {
             match intersect(&self.tris[slot], r.origin, r.direction, 0.0, r.tmax) {
                 Some((t, b1, b2)) if accept(slot as u32, b1, b2) => {
                     bary = (b1, b2);
@@ -137,14 +135,14 @@ impl Blas {
                 }
                 _ => f32::INFINITY,
             }
-        });
-        hit.then_some((rh.primitive_id, rh.t, bary.0, bary.1))
+        })?;
+        Some((slot, t, bary.0, bary.1))
     }
 
     #[inline]
     fn any(&self, ray: obvhs::ray::Ray, accept: &impl Fn(u32, f32, f32) -> bool) -> bool {
         let Some(bvh) = self.bvh.as_ref() else { return false };
-        !bvh.ray_traverse_miss(ray, |r, slot| match intersect(&self.tris[slot], r.origin, r.direction, 0.0, r.tmax) {
+        traverse::any(bvh, ray, |r, slot| match intersect(&self.tris[slot], r.origin, r.direction, 0.0, r.tmax) {
             Some((t, b1, b2)) if accept(slot as u32, b1, b2) => t,
             _ => f32::INFINITY,
         })
@@ -273,8 +271,7 @@ impl Accel {
             return Some(RawHit { instance: 0, tri, t, b1, b2 });
         };
         let mut best: Option<RawHit> = None;
-        let mut rh = RayHit::none();
-        tlas.ray_traverse(obvhs_ray(ray.origin, ray.dir, t_max), &mut rh, |r, slot| {
+        traverse::closest(tlas, obvhs_ray(ray.origin, ray.dir, t_max), |r, slot| {
             let inst = &self.instances[slot];
             let acc = |tri, b1, b2| accept(inst.blas, tri, b1, b2);
             match self.blases[inst.blas as usize].closest(Self::local_ray(inst, ray, r.tmax), &acc) {
@@ -296,7 +293,7 @@ impl Accel {
             let acc = |tri, b1, b2| accept(inst.blas, tri, b1, b2);
             return self.blases[inst.blas as usize].any(Self::local_ray(inst, ray, t_max), &acc);
         };
-        !tlas.ray_traverse_miss(obvhs_ray(ray.origin, ray.dir, t_max), |r, slot| {
+        traverse::any(tlas, obvhs_ray(ray.origin, ray.dir, t_max), |r, slot| {
             let inst = &self.instances[slot];
             let acc = |tri, b1, b2| accept(inst.blas, tri, b1, b2);
             if self.blases[inst.blas as usize].any(Self::local_ray(inst, ray, r.tmax), &acc) {

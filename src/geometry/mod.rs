@@ -9,6 +9,7 @@ mod accel;
 mod hit;
 mod mesh;
 mod offset;
+mod traverse;
 
 pub use accel::{Accel, AccelStats, Blas, Instance, RawHit};
 pub use hit::SurfaceHit;
