@@ -2,15 +2,14 @@
 //!
 //! Owns: the start-up test that the machine has every instruction-set extension the binary
 //! was compiled for. On x86-64, `.cargo/config.toml` compiles for `x86-64-v3` (AVX2, FMA,
-//! BMI1/2, LZCNT, POPCNT, SSE4.2: Intel since 2013, AMD since 2015), which renders 5–14 %
-//! faster than the 2003 baseline (README, "Building"). A binary built so executes illegal
-//! instructions on an older CPU, so [`require_build_features`] tells the user which
+//! BMI1/2, LZCNT, POPCNT, SSE4.2: Intel since 2013, AMD since 2015), which renders with 3–14 %
+//! less CPU than the 2003 baseline (README, "Building for a CPU"). A binary built so executes
+//! illegal instructions on an older CPU, so [`require_build_features`] tells the user which
 //! extensions are missing and how to rebuild, instead of letting the process die on SIGILL.
 //!
 //! It must run before any code that the compiler may have vectorised with those extensions:
-//! it only calls the standard library's feature detection (compiled for the baseline) and
-//! writes fixed byte strings, so that it passes through no 16- or 32-byte copies the
-//! compiler could encode with AVX.
+//! it reads CPUID and XCR0 itself, walks a `static` table and writes fixed byte strings, so
+//! that it passes through no 16- or 32-byte copies the compiler could encode with AVX.
 
 /// What the OS must save on a context switch for an extension's registers to be usable.
 #[cfg(target_arch = "x86_64")]
@@ -24,6 +23,13 @@ enum State {
     Zmm,
 }
 
+/// The CPUID output register an extension's bit is in.
+#[cfg(target_arch = "x86_64")]
+enum Register {
+    Ebx,
+    Ecx,
+}
+
 /// One instruction-set extension: its name as rustc spells it (with a leading space, for the
 /// message), whether this binary was compiled for it, and where CPUID reports it.
 #[cfg(target_arch = "x86_64")]
@@ -31,20 +37,19 @@ struct Extension {
     name: &'static [u8],
     built: bool,
     leaf: u32,
-    /// 1 = EBX, 2 = ECX.
-    register: u8,
+    register: Register,
     bit: u32,
     state: State,
 }
 
 #[cfg(target_arch = "x86_64")]
 macro_rules! extension {
-    ($name:tt, $leaf:expr, $register:expr, $bit:expr, $state:ident) => {
+    ($name:tt, $leaf:expr, $register:ident, $bit:expr, $state:ident) => {
         Extension {
             name: concat!(" ", $name).as_bytes(),
             built: cfg!(target_feature = $name),
             leaf: $leaf,
-            register: $register,
+            register: Register::$register,
             bit: $bit,
             state: State::$state,
         }
@@ -56,23 +61,23 @@ macro_rules! extension {
 /// stores being checked for.
 #[cfg(target_arch = "x86_64")]
 static EXTENSIONS: [Extension; 17] = [
-    extension!("sse3", 1, 2, 0, Sse),
-    extension!("ssse3", 1, 2, 9, Sse),
-    extension!("fma", 1, 2, 12, Ymm),
-    extension!("sse4.1", 1, 2, 19, Sse),
-    extension!("sse4.2", 1, 2, 20, Sse),
-    extension!("movbe", 1, 2, 22, Sse),
-    extension!("popcnt", 1, 2, 23, Sse),
-    extension!("avx", 1, 2, 28, Ymm),
-    extension!("f16c", 1, 2, 29, Ymm),
-    extension!("bmi1", 7, 1, 3, Sse),
-    extension!("avx2", 7, 1, 5, Ymm),
-    extension!("bmi2", 7, 1, 8, Sse),
-    extension!("avx512f", 7, 1, 16, Zmm),
-    extension!("avx512dq", 7, 1, 17, Zmm),
-    extension!("avx512bw", 7, 1, 30, Zmm),
-    extension!("avx512vl", 7, 1, 31, Zmm),
-    extension!("lzcnt", 0x8000_0001, 2, 5, Sse),
+    extension!("sse3", 1, Ecx, 0, Sse),
+    extension!("ssse3", 1, Ecx, 9, Sse),
+    extension!("fma", 1, Ecx, 12, Ymm),
+    extension!("sse4.1", 1, Ecx, 19, Sse),
+    extension!("sse4.2", 1, Ecx, 20, Sse),
+    extension!("movbe", 1, Ecx, 22, Sse),
+    extension!("popcnt", 1, Ecx, 23, Sse),
+    extension!("avx", 1, Ecx, 28, Ymm),
+    extension!("f16c", 1, Ecx, 29, Ymm),
+    extension!("bmi1", 7, Ebx, 3, Sse),
+    extension!("avx2", 7, Ebx, 5, Ymm),
+    extension!("bmi2", 7, Ebx, 8, Sse),
+    extension!("avx512f", 7, Ebx, 16, Zmm),
+    extension!("avx512dq", 7, Ebx, 17, Zmm),
+    extension!("avx512bw", 7, Ebx, 30, Zmm),
+    extension!("avx512vl", 7, Ebx, 31, Zmm),
+    extension!("lzcnt", 0x8000_0001, Ecx, 5, Sse),
 ];
 
 /// Whether this CPU (and its OS) offers `e`, from CPUID itself: the standard library's
@@ -86,7 +91,11 @@ fn offers(e: &Extension) -> bool {
         return false;
     }
     let r = __cpuid_count(e.leaf, 0);
-    if (if e.register == 1 { r.ebx } else { r.ecx }) >> e.bit & 1 == 0 {
+    let bits = match e.register {
+        Register::Ebx => r.ebx,
+        Register::Ecx => r.ecx,
+    };
+    if bits >> e.bit & 1 == 0 {
         return false;
     }
     if e.state == State::Sse {
@@ -132,7 +141,7 @@ pub fn require_build_features() {
         }
         let _ = err.write_all(
             b"\nrebuild it for this machine: RUSTFLAGS='-C target-cpu=native' cargo build --release\n\
-              (or for any x86-64 CPU with RUSTFLAGS='-C target-cpu=x86-64'; README, \"Building\")\n",
+              (or for any x86-64 CPU with RUSTFLAGS='-C target-cpu=x86-64'; README, \"Building for a CPU\")\n",
         );
         std::process::exit(2);
     }
