@@ -8,8 +8,8 @@
 //! best build/trace trade-off measured here (docs/conventions.md). This file and the traversal
 //! it runs (`traverse.rs`) are the only ones that import obvhs.
 //!
-//! A BLAS stores its triangles in BVH order ("direct layout"), so the slot obvhs hands to the
-//! intersection closure is the triangle index; callers reorder per-triangle data with the
+//! A BLAS stores its triangles in BVH order ("direct layout", `triangles.rs`), so the slots of
+//! the group of primitives a node test hands over are triangle indices; callers reorder per-triangle data with the
 //! permutation [`Blas::build`] returns. Instanced rays are moved into object space without
 //! normalising the direction, so hit distances `t` stay comparable across instances.
 
@@ -23,6 +23,7 @@ use obvhs::{
     triangle::Triangle,
 };
 
+use super::triangles::Triangles;
 use super::{Ray, traverse};
 use crate::math::{Mat3, Mat4, Vec3A};
 
@@ -50,49 +51,25 @@ fn obvhs_ray(o: Vec3A, d: Vec3A, t_max: f32) -> obvhs::ray::Ray {
     obvhs::ray::Ray::new(o, d + Vec3A::ZERO, 0.0, t_max)
 }
 
-/// Möller-Trumbore: (t, b1, b2) when the ray meets the triangle within `(tmin, tmax)`.
-#[inline(always)]
-fn intersect(tri: &Triangle, o: Vec3A, d: Vec3A, tmin: f32, tmax: f32) -> Option<(f32, f32, f32)> {
-    let e1 = tri.v1 - tri.v0;
-    let e2 = tri.v2 - tri.v0;
-    let pvec = d.cross(e2);
-    let det = e1.dot(pvec);
-    if det == 0.0 || !det.is_finite() {
-        return None;
-    }
-    let inv = 1.0 / det;
-    let tvec = o - tri.v0;
-    let b1 = tvec.dot(pvec) * inv;
-    if !(0.0..=1.0).contains(&b1) {
-        return None;
-    }
-    let qvec = tvec.cross(e1);
-    let b2 = d.dot(qvec) * inv;
-    if b2 < 0.0 || b1 + b2 > 1.0 {
-        return None;
-    }
-    let t = e2.dot(qvec) * inv;
-    (t > tmin && t < tmax).then_some((t, b1, b2))
-}
-
 /// A bottom-level BVH and its triangles in BVH order.
 pub struct Blas {
     bvh: Option<CwBvh>,
-    tris: Vec<Triangle>,
+    tris: Triangles,
 }
 
 impl Blas {
     /// Builds the BVH over `tris` (in the current rayon pool). Returns it and the
     /// permutation `order[new] = old`.
     pub fn build(tris: Vec<[Vec3A; 3]>) -> (Self, Vec<u32>) {
-        let tris: Vec<Triangle> = tris.into_iter().map(|[v0, v1, v2]| Triangle { v0, v1, v2 }).collect();
         if tris.is_empty() {
-            return (Self { bvh: None, tris }, Vec::new());
+            return (Self { bvh: None, tris: Triangles::new(&[]) }, Vec::new());
         }
-        let bvh = build_cwbvh_from_tris(&tris, BvhBuildParams::medium_build(), &mut Duration::default());
+        let prims: Vec<Triangle> = tris.iter().map(|&[v0, v1, v2]| Triangle { v0, v1, v2 }).collect();
+        let bvh = build_cwbvh_from_tris(&prims, BvhBuildParams::medium_build(), &mut Duration::default());
+        drop(prims);
         let order = bvh.primitive_indices.clone();
-        let sorted = order.iter().map(|&i| tris[i as usize]).collect();
-        (Self { bvh: Some(bvh), tris: sorted }, order)
+        let sorted: Vec<[Vec3A; 3]> = order.iter().map(|&i| tris[i as usize]).collect();
+        (Self { bvh: Some(bvh), tris: Triangles::new(&sorted) }, order)
     }
 
     /// Number of triangles.
@@ -102,21 +79,20 @@ impl Blas {
 
     /// True when it holds no triangle.
     pub fn is_empty(&self) -> bool {
-        self.tris.is_empty()
+        self.tris.len() == 0
     }
 
     /// Vertices of triangle `tri` (BVH order), in this BLAS's space.
     #[inline]
     pub fn vertices(&self, tri: u32) -> [Vec3A; 3] {
-        let t = &self.tris[tri as usize];
-        [t.v0, t.v1, t.v2]
+        self.tris.vertices(tri)
     }
 
     fn memory_bytes(&self) -> usize {
         self.bvh
             .as_ref()
             .map_or(0, |b| b.nodes.len() * std::mem::size_of_val(&b.nodes[0]) + b.primitive_indices.len() * 4)
-            + self.tris.len() * std::mem::size_of::<Triangle>()
+            + self.tris.memory_bytes()
     }
 
     fn bounds(&self) -> Aabb {
@@ -127,14 +103,10 @@ impl Blas {
     fn closest(&self, ray: obvhs::ray::Ray, accept: &impl Fn(u32, f32, f32) -> bool) -> Option<(u32, f32, f32, f32)> {
         let bvh = self.bvh.as_ref()?;
         let mut bary = (0.0f32, 0.0f32);
-        let (slot, t) = traverse::closest(bvh, ray, |r, slot| {
-            match intersect(&self.tris[slot], r.origin, r.direction, 0.0, r.tmax) {
-                Some((t, b1, b2)) if accept(slot as u32, b1, b2) => {
-                    bary = (b1, b2);
-                    t
-                }
-                _ => f32::INFINITY,
-            }
+        let (slot, t) = traverse::closest(bvh, ray, |r, base, mask| {
+            let (slot, t, b1, b2) = self.tris.closest_in_group(r.origin, r.direction, r.tmax, base, mask, accept)?;
+            bary = (b1, b2);
+            Some((slot, t))
         })?;
         Some((slot, t, bary.0, bary.1))
     }
@@ -142,9 +114,8 @@ impl Blas {
     #[inline]
     fn any(&self, ray: obvhs::ray::Ray, accept: &impl Fn(u32, f32, f32) -> bool) -> bool {
         let Some(bvh) = self.bvh.as_ref() else { return false };
-        traverse::any(bvh, ray, |r, slot| match intersect(&self.tris[slot], r.origin, r.direction, 0.0, r.tmax) {
-            Some((t, b1, b2)) if accept(slot as u32, b1, b2) => t,
-            _ => f32::INFINITY,
+        traverse::any(bvh, ray, |r, base, mask| {
+            self.tris.any_in_group(r.origin, r.direction, r.tmax, base, mask, accept)
         })
     }
 }
@@ -271,16 +242,20 @@ impl Accel {
             return Some(RawHit { instance: 0, tri, t, b1, b2 });
         };
         let mut best: Option<RawHit> = None;
-        traverse::closest(tlas, obvhs_ray(ray.origin, ray.dir, t_max), |r, slot| {
-            let inst = &self.instances[slot];
-            let acc = |tri, b1, b2| accept(inst.blas, tri, b1, b2);
-            match self.blases[inst.blas as usize].closest(Self::local_ray(inst, ray, r.tmax), &acc) {
-                Some((tri, t, b1, b2)) => {
-                    best = Some(RawHit { instance: slot as u32, tri, t, b1, b2 });
-                    t
+        traverse::closest(tlas, obvhs_ray(ray.origin, ray.dir, t_max), |r, base, mask| {
+            let mut nearest = None;
+            for slot in traverse::slots(base, mask) {
+                let inst = &self.instances[slot as usize];
+                let acc = |tri, b1, b2| accept(inst.blas, tri, b1, b2);
+                let tmax = nearest.map_or(r.tmax, |(_, t)| t);
+                if let Some((tri, t, b1, b2)) =
+                    self.blases[inst.blas as usize].closest(Self::local_ray(inst, ray, tmax), &acc)
+                {
+                    best = Some(RawHit { instance: slot, tri, t, b1, b2 });
+                    nearest = Some((slot, t));
                 }
-                None => f32::INFINITY,
             }
+            nearest
         });
         best
     }
@@ -293,14 +268,12 @@ impl Accel {
             let acc = |tri, b1, b2| accept(inst.blas, tri, b1, b2);
             return self.blases[inst.blas as usize].any(Self::local_ray(inst, ray, t_max), &acc);
         };
-        traverse::any(tlas, obvhs_ray(ray.origin, ray.dir, t_max), |r, slot| {
-            let inst = &self.instances[slot];
-            let acc = |tri, b1, b2| accept(inst.blas, tri, b1, b2);
-            if self.blases[inst.blas as usize].any(Self::local_ray(inst, ray, r.tmax), &acc) {
-                0.5 * r.tmax
-            } else {
-                f32::INFINITY
-            }
+        traverse::any(tlas, obvhs_ray(ray.origin, ray.dir, t_max), |r, base, mask| {
+            traverse::slots(base, mask).any(|slot| {
+                let inst = &self.instances[slot as usize];
+                let acc = |tri, b1, b2| accept(inst.blas, tri, b1, b2);
+                self.blases[inst.blas as usize].any(Self::local_ray(inst, ray, r.tmax), &acc)
+            })
         })
     }
 }

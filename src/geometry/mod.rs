@@ -1,8 +1,9 @@
 //! Surfaces as triangles: storage, ray queries and robust ray spawning.
 //!
 //! Owns: [`Ray`], the flattened world-space triangle soup with its shading attributes
-//! ([`Geometry`]), the obvhs acceleration structure (in `accel.rs`, the only file that imports
-//! obvhs) and [`SurfaceHit`]. Depends on `math` only; knows nothing of materials or lights
+//! ([`Geometry`]), the obvhs acceleration structure (`accel.rs`, and `traverse.rs` its
+//! traversal: the only files that import obvhs), the triangles' storage and test
+//! (`triangles.rs`) and [`SurfaceHit`]. Depends on `math` only; knows nothing of materials or lights
 //! beyond the ids it stores per triangle.
 
 mod accel;
@@ -10,6 +11,7 @@ mod hit;
 mod mesh;
 mod offset;
 mod traverse;
+mod triangles;
 
 pub use accel::{Accel, AccelStats, Blas, Instance, RawHit};
 pub use hit::SurfaceHit;

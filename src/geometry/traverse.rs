@@ -83,37 +83,69 @@ unsafe fn node_hits_avx2(node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
     }
 }
 
-/// The closest primitive along `ray`: `hit(ray, slot)` tests primitive `slot` (an index into
-/// `bvh.primitive_indices`) against `ray`, whose `tmax` has shrunk to the closest hit so far,
-/// and returns its distance (∞ for a miss). Returns the slot and distance of the closest hit.
+/// The slots `base + i` for the bits `i` of a group's `mask`, highest first: the order in
+/// which obvhs's traversal visits a group's primitives.
 #[inline(always)]
-pub fn closest(bvh: &CwBvh, ray: Ray, mut hit: impl FnMut(&Ray, usize) -> f32) -> Option<(u32, f32)> {
+pub fn slots(base: u32, mask: u32) -> impl Iterator<Item = u32> {
+    let mut left = mask;
+    std::iter::from_fn(move || {
+        (left != 0).then(|| {
+            let bit = 31 - left.leading_zeros();
+            left &= !(1 << bit);
+            base + bit
+        })
+    })
+}
+
+/// The primitives a node test found, as a group: the slots [`slots`]`(base, mask)` (indices
+/// into `bvh.primitive_indices`). obvhs hands them to its closure one at a time; taking the
+/// whole group at once lets a test cover several at a time.
+macro_rules! take_group {
+    ($state:expr) => {{
+        let mask = $state.primitive_group.y | (1 << ($state.primitive_id - $state.primitive_group.x));
+        $state.primitive_group.y = 0;
+        ($state.primitive_group.x, mask)
+    }};
+}
+
+/// The closest primitive along `ray`: `group(ray, base, mask)` tests the group of primitives
+/// [`slots`]`(base, mask)` against `ray`, whose `tmax` has shrunk to the closest hit so far,
+/// and returns the slot and distance of its nearest hit closer than that, the highest slot
+/// winning a tie (as one primitive at a time in [`slots`] order would find). Returns the slot
+/// and distance of the closest hit.
+#[inline(always)]
+pub fn closest(
+    bvh: &CwBvh,
+    ray: Ray,
+    mut group: impl FnMut(&Ray, u32, u32) -> Option<(u32, f32)>,
+) -> Option<(u32, f32)> {
     use glam::UVec2;
     let mut ray = ray;
     let mut best = None;
     let mut state = bvh.new_traversal(ray.direction);
     let mut node;
     obvhs::traverse!(bvh, node, state, node_hits(node, &ray, state.oct_inv4), {
-        let t = hit(&ray, state.primitive_id as usize);
-        if t < ray.tmax {
-            best = Some((state.primitive_id, t));
+        let (base, mask) = take_group!(state);
+        if let Some((slot, t)) = group(&ray, base, mask) {
+            best = Some((slot, t));
             ray.tmax = t;
         }
     });
     best
 }
 
-/// True when `hit(ray, slot)` (as in [`closest`], `ray` unchanged) finds any primitive
-/// closer than `ray.tmax`; stops at the first.
+/// True when `group(ray, base, mask)` (as in [`closest`], `ray` unchanged) finds a primitive
+/// of some group closer than `ray.tmax`; stops at the first.
 #[inline(always)]
-pub fn any(bvh: &CwBvh, ray: Ray, mut hit: impl FnMut(&Ray, usize) -> f32) -> bool {
+pub fn any(bvh: &CwBvh, ray: Ray, mut group: impl FnMut(&Ray, u32, u32) -> bool) -> bool {
     use glam::UVec2;
     let mut state = bvh.new_traversal(ray.direction);
     let mut node;
     let mut found = false;
     'search: {
         obvhs::traverse!(bvh, node, state, node_hits(node, &ray, state.oct_inv4), {
-            if hit(&ray, state.primitive_id as usize) < ray.tmax {
+            let (base, mask) = take_group!(state);
+            if group(&ray, base, mask) {
                 found = true;
                 break 'search;
             }
@@ -177,6 +209,18 @@ mod tests {
         let tris = soup(3000);
         let bvh = build_cwbvh_from_tris(&tris, BvhBuildParams::medium_build(), &mut Duration::default());
         let test = |r: &Ray, slot: usize| tris[bvh.primitive_indices[slot] as usize].intersect(r);
+        // One primitive at a time, as obvhs's closures see them.
+        let nearest = |r: &Ray, base: u32, mask: u32| {
+            let mut best: Option<(u32, f32)> = None;
+            for slot in slots(base, mask) {
+                let t = test(r, slot as usize);
+                if t < best.map_or(r.tmax, |b| b.1) {
+                    best = Some((slot, t));
+                }
+            }
+            best
+        };
+        let blocked_by = |r: &Ray, base: u32, mask: u32| slots(base, mask).any(|slot| test(r, slot as usize) < r.tmax);
         let mut u = numbers(5);
         let (mut hits, mut blocked) = (0, 0);
         for _ in 0..5000 {
@@ -185,10 +229,10 @@ mod tests {
             let ray = Ray::new(o, d, 0.0, u() * 3.0);
             let mut rh = obvhs::ray::RayHit::none();
             let theirs = bvh.ray_traverse(ray, &mut rh, test).then_some((rh.primitive_id, rh.t));
-            assert_eq!(closest(&bvh, ray, test), theirs);
-            assert_eq!(any(&bvh, ray, test), !bvh.ray_traverse_miss(ray, test));
+            assert_eq!(closest(&bvh, ray, nearest), theirs);
+            assert_eq!(any(&bvh, ray, blocked_by), !bvh.ray_traverse_miss(ray, test));
             hits += theirs.is_some() as u32;
-            blocked += any(&bvh, ray, test) as u32;
+            blocked += any(&bvh, ray, blocked_by) as u32;
         }
         assert!(hits > 500 && blocked > 500, "{hits} hits, {blocked} blocked");
     }
