@@ -2,6 +2,16 @@
 
 use crate::math::{Vec2, Vec3A};
 
+/// A triangle of a [`Geometry`](super::Geometry): its instance and its slot in that
+/// instance's BLAS.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TriangleRef {
+    /// Index of the instance.
+    pub instance: u32,
+    /// Triangle within the instance's BLAS (BVH order).
+    pub tri: u32,
+}
+
 /// A ray-surface intersection, in world space.
 #[derive(Clone, Copy, Debug)]
 pub struct SurfaceHit {
@@ -14,10 +24,9 @@ pub struct SurfaceHit {
     pub n_shading: Vec3A,
     /// Texture coordinates (zero when the mesh has none).
     pub uv: Vec2,
-    /// ∂p/∂u of the triangle (zero without UVs): the tangent normal maps use.
-    pub dpdu: Vec3A,
-    /// ∂p/∂v of the triangle (zero without UVs).
-    pub dpdv: Vec3A,
+    /// The triangle hit, for what only some materials need of it
+    /// ([`Geometry::position_derivatives`](super::Geometry::position_derivatives)).
+    pub triangle: TriangleRef,
     /// Ray parameter of the hit.
     pub t: f32,
     /// Material index.

@@ -9,7 +9,7 @@
 use std::time::Instant;
 
 use super::accel::{Accel, Blas, Instance};
-use super::{Ray, SurfaceHit};
+use super::{Ray, SurfaceHit, TriangleRef};
 use crate::math::{Mat4, Vec2, Vec3A};
 
 /// `TriangleInfo::light` of a triangle that does not emit.
@@ -232,24 +232,29 @@ impl Geometry {
             n_geom
         };
         let uv = self.uv_at(info, b1, b2);
-        let (dpdu, dpdv) = if info.has_uv {
-            let [t0, t1, t2] = info.attr.map(|i| self.uvs[i as usize]);
-            position_derivatives([v0, v1, v2], [t0, t1, t2])
-        } else {
-            (Vec3A::ZERO, Vec3A::ZERO)
-        };
         Some(SurfaceHit {
             p,
             // World vertices of a mirrored instance wind the other way: flip back to its front.
             n_geom: if inst.mirrored { -n_geom } else { n_geom },
             n_shading,
             uv,
-            dpdu,
-            dpdv,
+            triangle: TriangleRef { instance: raw.instance, tri: raw.tri },
             t: raw.t,
             material: info.material,
             light: (info.light != NO_LIGHT).then_some(info.light),
         })
+    }
+
+    /// ∂p/∂u and ∂p/∂v of `triangle` in world space (zero without UVs or where its UV
+    /// mapping is degenerate): the tangent frame normal maps use, asked for only by them.
+    pub fn position_derivatives(&self, triangle: TriangleRef) -> (Vec3A, Vec3A) {
+        let inst = &self.accel.instances()[triangle.instance as usize];
+        let info = self.info(inst.blas, triangle.tri);
+        if !info.has_uv {
+            return (Vec3A::ZERO, Vec3A::ZERO);
+        }
+        let p = world_vertices(inst, self.accel.blases()[inst.blas as usize].vertices(triangle.tri));
+        position_derivatives(p, info.attr.map(|i| self.uvs[i as usize]))
     }
 
     /// True when something not cut out blocks the segment from `origin` to

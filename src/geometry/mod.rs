@@ -14,7 +14,7 @@ mod traverse;
 mod triangles;
 
 pub use accel::{Accel, AccelStats, Blas, Instance, RawHit};
-pub use hit::SurfaceHit;
+pub use hit::{SurfaceHit, TriangleRef};
 pub use mesh::{Attributes, Geometry, GeometryBuilder, NO_LIGHT, TriangleInfo};
 pub use offset::offset_ray_origin;
 

@@ -164,14 +164,19 @@ pub fn radiance(
         }
         let material = &scene.materials[hit.material as usize];
         let Some(bsdf) = material.bsdf(hit.uv, &scene.images, ray.dir.dot(hit.n_geom) < 0.0) else { break };
-        let n_shading = material.mapped_normal(hit.n_shading, hit.dpdu, hit.dpdv, hit.uv, &scene.images);
+        let n_shading = material.mapped_normal(
+            hit.n_shading,
+            || scene.geometry.position_derivatives(hit.triangle),
+            hit.uv,
+            &scene.images,
+        );
         let sp = ShadingPoint::new(bsdf, hit.n_geom, n_shading, wo);
 
         if !scene.lights.is_empty() {
             l += beta * estimate_direct(scene, strategy, &sp, hit.p, medium, stream, depth, tally);
         }
 
-        let u_lobe = stream.get_1d(depth, Dim::BsdfLobe, 0);
+        let u_lobe = if sp.chooses_lobes() { stream.get_1d(depth, Dim::BsdfLobe, 0) } else { 0.0 };
         let u_dir = stream.get_2d(depth, Dim::BsdfDirection, 0);
         let Some(bs) = sp.sample(u_lobe, u_dir) else { break };
         beta *= bs.weight;

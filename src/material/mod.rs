@@ -111,6 +111,12 @@ impl BsdfAt {
         }
     }
 
+    /// Whether [`sample`](Self::sample) reads its `u_lobe` (a BSDF of one lobe does not).
+    #[inline]
+    pub fn chooses_lobes(&self) -> bool {
+        !matches!(self, BsdfAt::Diffuse(..))
+    }
+
     /// Samples an incident direction; `u_lobe` picks a lobe, `u` the direction in it.
     #[inline]
     pub fn sample(&self, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
@@ -258,11 +264,19 @@ impl Material {
         }
     }
 
-    /// The shading normal with the normal map applied. `n`: interpolated normal, `dpdu`,
-    /// `dpdv`: the triangle's position derivatives in texture space (zero without UVs).
+    /// The shading normal with the normal map applied. `n`: interpolated normal,
+    /// `derivatives`: the triangle's position derivatives in texture space, (dp/du, dp/dv)
+    /// (zero without UVs), asked for only when there is a normal map.
     #[inline]
-    pub fn mapped_normal(&self, n: Vec3A, dpdu: Vec3A, dpdv: Vec3A, uv: Vec2, images: &[Image]) -> Vec3A {
+    pub fn mapped_normal(
+        &self,
+        n: Vec3A,
+        derivatives: impl FnOnce() -> (Vec3A, Vec3A),
+        uv: Vec2,
+        images: &[Image],
+    ) -> Vec3A {
         let Some((tex, scale)) = &self.normal_texture else { return n };
+        let (dpdu, dpdv) = derivatives();
         let Some(t) = (dpdu - n * n.dot(dpdu)).try_normalize() else { return n };
         // Bitangent handedness follows the UV layout (mirrored UVs flip it).
         let b = if n.cross(t).dot(dpdv) < 0.0 { -n.cross(t) } else { n.cross(t) };
@@ -353,6 +367,13 @@ impl ShadingPoint {
         self.bsdf.pdf(li)
     }
 
+    /// Whether [`sample`](Self::sample) reads its `u_lobe`: a caller may pass anything
+    /// (and skip drawing the number) when it does not.
+    #[inline]
+    pub fn chooses_lobes(&self) -> bool {
+        self.bsdf.chooses_lobes()
+    }
+
     /// Samples a world direction.
     #[inline]
     pub fn sample(&self, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
@@ -372,5 +393,65 @@ impl ShadingPoint {
     #[inline]
     pub fn selection_normal(&self) -> Vec3A {
         if self.transmits { Vec3A::ZERO } else { self.frame.n }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The directions a shading point samples for `u_lobe` over a grid of `u`.
+    fn directions(sp: &ShadingPoint, u_lobe: f32) -> Vec<Option<Vec3A>> {
+        (0..64)
+            .map(|k| {
+                sp.sample(u_lobe, Vec2::new((k % 8) as f32 / 8.0 + 0.05, (k / 8) as f32 / 8.0 + 0.05)).map(|s| s.wi)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn normal_maps_tilt_along_the_uv_tangent_of_the_triangle_hit() {
+        use crate::geometry::{Attributes, GeometryBuilder, NO_LIGHT, Ray};
+        use crate::math::UVec2;
+        // One texel: tangent-space normal (0.6, 0, 0.8), tilted towards +u.
+        let images = [Image { name: "n".into(), size: UVec2::ONE, texels: vec![[204, 128, 230, 255]] }];
+        let material =
+            Material { normal_texture: Some((TextureRef::plain(0), 1.0)), ..Material::diffuse("mapped", Rgb::ONE) };
+        let quad = [
+            Vec3A::new(-1.0, -1.0, 0.0),
+            Vec3A::new(1.0, -1.0, 0.0),
+            Vec3A::new(1.0, 1.0, 0.0),
+            Vec3A::new(-1.0, 1.0, 0.0),
+        ];
+        // u along +x, then mirrored (u along −x).
+        for (uvs, sign) in
+            [([Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y], 1.0), ([Vec2::X, Vec2::ZERO, Vec2::Y, Vec2::ONE], -1.0)]
+        {
+            let mut g = GeometryBuilder::new();
+            let base = g.push_vertices(Some(&[Vec3A::Z; 4]), Some(&uvs), 4);
+            let attr = Some(Attributes { base, smooth: true, has_uv: true });
+            g.push_triangle([quad[0], quad[1], quad[2]], [0, 1, 2], attr, 0, NO_LIGHT, false);
+            g.push_triangle([quad[0], quad[2], quad[3]], [0, 2, 3], attr, 0, NO_LIGHT, false);
+            let geo = g.build();
+            let hit =
+                geo.intersect(&Ray::new(Vec3A::new(0.2, 0.3, 1.0), -Vec3A::Z), f32::INFINITY, |_, _| false).unwrap();
+            let n = material.mapped_normal(hit.n_shading, || geo.position_derivatives(hit.triangle), hit.uv, &images);
+            assert!((n.x - 0.6 * sign).abs() < 0.01 && n.y.abs() < 0.01 && (n.z - 0.8).abs() < 0.01, "{n}");
+        }
+        // Without a normal map the derivatives are never asked for.
+        let plain = Material::diffuse("plain", Rgb::ONE);
+        assert_eq!(plain.mapped_normal(Vec3A::Z, || unreachable!(), Vec2::ZERO, &images), Vec3A::Z);
+    }
+
+    #[test]
+    fn only_bsdfs_that_choose_lobes_read_the_lobe_number() {
+        let (n, wo) = (Vec3A::Z, Vec3A::new(0.3, 0.1, 0.9).normalize());
+        let lambert = ShadingPoint::new(Bsdf::Diffuse(Diffuse { albedo: Rgb::splat(0.5) }), n, n, wo);
+        assert!(!lambert.chooses_lobes());
+        assert_eq!(directions(&lambert, 0.01), directions(&lambert, 0.99));
+        let principled = Principled::new(Rgb::splat(0.5), 0.0, 0.3, 1.5, 1.0, Rgb::ONE);
+        let layered = ShadingPoint::new(Bsdf::Principled(principled), n, n, wo);
+        assert!(layered.chooses_lobes());
+        assert_ne!(directions(&layered, 0.01), directions(&layered, 0.99));
     }
 }
