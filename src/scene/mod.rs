@@ -115,17 +115,20 @@ impl Scene {
     /// Closest surface along `ray` within `t_max` (alpha cut-outs let rays through).
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SurfaceHit> {
-        let key = ray_key(ray);
-        self.geometry
-            .intersect(ray, t_max, |m, uv| self.materials[m as usize].is_cut_out(uv, &self.images, hit_number(key, uv)))
+        self.geometry.intersect(ray, t_max, |m, uv| self.cut_out(ray, m, uv))
     }
 
     /// True when something blocks `ray` before `t_max`.
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        let key = ray_key(ray);
-        self.geometry
-            .occluded(ray, t_max, |m, uv| self.materials[m as usize].is_cut_out(uv, &self.images, hit_number(key, uv)))
+        self.geometry.occluded(ray, t_max, |m, uv| self.cut_out(ray, m, uv))
+    }
+
+    /// Whether material `m` lets `ray` through at `uv` (asked only about alpha-masked
+    /// triangles, so the ray's number is drawn only there).
+    #[inline]
+    fn cut_out(&self, ray: &Ray, m: u32, uv: crate::math::Vec2) -> bool {
+        self.materials[m as usize].is_cut_out(uv, &self.images, hit_number(ray_key(ray), uv))
     }
 
     /// Total emitted power (luminance watts) of every light.
