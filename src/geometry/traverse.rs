@@ -157,18 +157,10 @@ pub fn any(bvh: &CwBvh, ray: Ray, mut group: impl FnMut(&Ray, u32, u32) -> bool)
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sampling::test_numbers as numbers;
     use glam::Vec3A;
     use obvhs::{BvhBuildParams, cwbvh::builder::build_cwbvh_from_tris, triangle::Triangle};
     use std::time::Duration;
-
-    /// A reproducible stream of numbers in [0, 1).
-    fn numbers(seed: u64) -> impl FnMut() -> f32 {
-        let mut s = seed;
-        move || {
-            s = crate::sampling::fmix64(s.wrapping_add(0x9e37_79b9_7f4a_7c15));
-            (s >> 40) as f32 / (1u64 << 24) as f32
-        }
-    }
 
     fn soup(n: usize) -> Vec<Triangle> {
         let mut u = numbers(7);

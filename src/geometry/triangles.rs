@@ -253,15 +253,7 @@ struct Hits8 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A reproducible stream of numbers in [0, 1).
-    fn numbers(seed: u64) -> impl FnMut() -> f32 {
-        let mut s = seed;
-        move || {
-            s = crate::sampling::fmix64(s.wrapping_add(0x9e37_79b9_7f4a_7c15));
-            (s >> 40) as f32 / (1u64 << 24) as f32
-        }
-    }
+    use crate::sampling::test_numbers as numbers;
 
     /// Slot by slot with the scalar test, as obvhs's traversal would: the reference.
     fn scalar_closest(tris: &[[Vec3A; 3]], o: Vec3A, d: Vec3A, tmax: f32, base: u32, mask: u32) -> Option<GroupHit> {

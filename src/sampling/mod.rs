@@ -97,6 +97,17 @@ pub fn unit_f32(u: u64) -> f32 {
     sobol::to_unit32((u >> 32) as u32)
 }
 
+/// A reproducible stream of numbers in [0, 1) for tests that want arbitrary inputs (not
+/// sample points).
+#[cfg(test)]
+pub fn test_numbers(seed: u64) -> impl FnMut() -> f32 {
+    let mut s = seed;
+    move || {
+        s = fmix64(s.wrapping_add(0x9e37_79b9_7f4a_7c15));
+        (s >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
