@@ -8,9 +8,9 @@
 //! best build/trace trade-off measured here (docs/conventions.md). This file and the traversal
 //! it runs (`traverse.rs`) are the only ones that import obvhs.
 //!
-//! A BLAS stores its triangles in BVH order ("direct layout", `triangles.rs`), so the slots of
-//! the group of primitives a node test hands over are triangle indices; callers reorder per-triangle data with the
-//! permutation [`Blas::build`] returns. Instanced rays are moved into object space without
+//! A BLAS stores its triangles in BVH order ("direct layout", `triangles.rs`), so the slots
+//! of the group of primitives a node test hands over are triangle indices; callers reorder
+//! per-triangle data with the permutation [`Blas::build`] returns. Instanced rays are moved into object space without
 //! normalising the direction, so hit distances `t` stay comparable across instances.
 
 use std::time::{Duration, Instant};
@@ -103,8 +103,8 @@ impl Blas {
     fn closest(&self, ray: obvhs::ray::Ray, accept: &impl Fn(u32, f32, f32) -> bool) -> Option<(u32, f32, f32, f32)> {
         let bvh = self.bvh.as_ref()?;
         let mut bary = (0.0f32, 0.0f32);
-        let (slot, t) = traverse::closest(bvh, ray, |r, base, mask| {
-            let (slot, t, b1, b2) = self.tris.closest_in_group(r.origin, r.direction, r.tmax, base, mask, accept)?;
+        let (slot, t) = traverse::closest(bvh, ray, |r, group| {
+            let (slot, t, b1, b2) = self.tris.closest_in_group(r.origin, r.direction, r.tmax, group, accept)?;
             bary = (b1, b2);
             Some((slot, t))
         })?;
@@ -114,9 +114,7 @@ impl Blas {
     #[inline]
     fn any(&self, ray: obvhs::ray::Ray, accept: &impl Fn(u32, f32, f32) -> bool) -> bool {
         let Some(bvh) = self.bvh.as_ref() else { return false };
-        traverse::any(bvh, ray, |r, base, mask| {
-            self.tris.any_in_group(r.origin, r.direction, r.tmax, base, mask, accept)
-        })
+        traverse::any(bvh, ray, |r, group| self.tris.any_in_group(r.origin, r.direction, r.tmax, group, accept))
     }
 }
 
@@ -242,9 +240,9 @@ impl Accel {
             return Some(RawHit { instance: 0, tri, t, b1, b2 });
         };
         let mut best: Option<RawHit> = None;
-        traverse::closest(tlas, obvhs_ray(ray.origin, ray.dir, t_max), |r, base, mask| {
+        traverse::closest(tlas, obvhs_ray(ray.origin, ray.dir, t_max), |r, group| {
             let mut nearest = None;
-            for slot in traverse::slots(base, mask) {
+            for slot in group.slots() {
                 let inst = &self.instances[slot as usize];
                 let acc = |tri, b1, b2| accept(inst.blas, tri, b1, b2);
                 let tmax = nearest.map_or(r.tmax, |(_, t)| t);
@@ -268,8 +266,8 @@ impl Accel {
             let acc = |tri, b1, b2| accept(inst.blas, tri, b1, b2);
             return self.blases[inst.blas as usize].any(Self::local_ray(inst, ray, t_max), &acc);
         };
-        traverse::any(tlas, obvhs_ray(ray.origin, ray.dir, t_max), |r, base, mask| {
-            traverse::slots(base, mask).any(|slot| {
+        traverse::any(tlas, obvhs_ray(ray.origin, ray.dir, t_max), |r, group| {
+            group.slots().any(|slot| {
                 let inst = &self.instances[slot as usize];
                 let acc = |tri, b1, b2| accept(inst.blas, tri, b1, b2);
                 self.blases[inst.blas as usize].any(Self::local_ray(inst, ray, r.tmax), &acc)

@@ -3,8 +3,8 @@
 //! Owns: [`Ray`], the flattened world-space triangle soup with its shading attributes
 //! ([`Geometry`]), the obvhs acceleration structure (`accel.rs`, and `traverse.rs` its
 //! traversal: the only files that import obvhs), the triangles' storage and test
-//! (`triangles.rs`) and [`SurfaceHit`]. Depends on `math` only; knows nothing of materials or lights
-//! beyond the ids it stores per triangle.
+//! (`triangles.rs`) and [`SurfaceHit`]. Depends on `math` only; knows nothing of materials or
+//! lights beyond the ids it stores per triangle.
 
 mod accel;
 mod hit;

@@ -83,50 +83,56 @@ unsafe fn node_hits_avx2(node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
     }
 }
 
-/// The slots `base + i` for the bits `i` of a group's `mask`, highest first: the order in
-/// which obvhs's traversal visits a group's primitives.
-#[inline(always)]
-pub fn slots(base: u32, mask: u32) -> impl Iterator<Item = u32> {
-    let mut left = mask;
-    std::iter::from_fn(move || {
-        (left != 0).then(|| {
-            let bit = 31 - left.leading_zeros();
-            left &= !(1 << bit);
-            base + bit
-        })
-    })
+/// The primitives a node test found, as a group: slots `base + i` (indices into
+/// `bvh.primitive_indices`) for the bits `i` of `mask`. obvhs hands them to its closure one at
+/// a time; taking the whole group at once lets a test cover several at a time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Group {
+    /// The slot of bit 0.
+    pub base: u32,
+    /// Which slots from `base` (24 bits).
+    pub mask: u32,
 }
 
-/// The primitives a node test found, as a group: the slots [`slots`]`(base, mask)` (indices
-/// into `bvh.primitive_indices`). obvhs hands them to its closure one at a time; taking the
-/// whole group at once lets a test cover several at a time.
+impl Group {
+    /// The group's slots, highest first: the order in which obvhs's traversal visits them.
+    #[inline(always)]
+    pub fn slots(self) -> impl Iterator<Item = u32> {
+        let (base, mut left) = (self.base, self.mask);
+        std::iter::from_fn(move || {
+            (left != 0).then(|| {
+                let bit = 31 - left.leading_zeros();
+                left &= !(1 << bit);
+                base + bit
+            })
+        })
+    }
+}
+
+/// Takes the rest of the traversal state's current primitive group (the one obvhs is about
+/// to hand over included) as a [`Group`].
 macro_rules! take_group {
     ($state:expr) => {{
         let mask = $state.primitive_group.y | (1 << ($state.primitive_id - $state.primitive_group.x));
         $state.primitive_group.y = 0;
-        ($state.primitive_group.x, mask)
+        Group { base: $state.primitive_group.x, mask }
     }};
 }
 
-/// The closest primitive along `ray`: `group(ray, base, mask)` tests the group of primitives
-/// [`slots`]`(base, mask)` against `ray`, whose `tmax` has shrunk to the closest hit so far,
-/// and returns the slot and distance of its nearest hit closer than that, the highest slot
-/// winning a tie (as one primitive at a time in [`slots`] order would find). Returns the slot
+/// The closest primitive along `ray`: `test(ray, group)` tests a [`Group`] of primitives
+/// against `ray`, whose `tmax` has shrunk to the closest hit so far, and returns the slot and
+/// distance of its nearest hit closer than that, the highest slot winning a tie (as one
+/// primitive at a time in [`Group::slots`] order would find). Returns the slot
 /// and distance of the closest hit.
 #[inline(always)]
-pub fn closest(
-    bvh: &CwBvh,
-    ray: Ray,
-    mut group: impl FnMut(&Ray, u32, u32) -> Option<(u32, f32)>,
-) -> Option<(u32, f32)> {
+pub fn closest(bvh: &CwBvh, ray: Ray, mut test: impl FnMut(&Ray, Group) -> Option<(u32, f32)>) -> Option<(u32, f32)> {
     use glam::UVec2;
     let mut ray = ray;
     let mut best = None;
     let mut state = bvh.new_traversal(ray.direction);
     let mut node;
     obvhs::traverse!(bvh, node, state, node_hits(node, &ray, state.oct_inv4), {
-        let (base, mask) = take_group!(state);
-        if let Some((slot, t)) = group(&ray, base, mask) {
+        if let Some((slot, t)) = test(&ray, take_group!(state)) {
             best = Some((slot, t));
             ray.tmax = t;
         }
@@ -134,18 +140,17 @@ pub fn closest(
     best
 }
 
-/// True when `group(ray, base, mask)` (as in [`closest`], `ray` unchanged) finds a primitive
-/// of some group closer than `ray.tmax`; stops at the first.
+/// True when `test(ray, group)` (as in [`closest`], `ray` unchanged) finds a primitive of some
+/// group closer than `ray.tmax`; stops at the first.
 #[inline(always)]
-pub fn any(bvh: &CwBvh, ray: Ray, mut group: impl FnMut(&Ray, u32, u32) -> bool) -> bool {
+pub fn any(bvh: &CwBvh, ray: Ray, mut test: impl FnMut(&Ray, Group) -> bool) -> bool {
     use glam::UVec2;
     let mut state = bvh.new_traversal(ray.direction);
     let mut node;
     let mut found = false;
     'search: {
         obvhs::traverse!(bvh, node, state, node_hits(node, &ray, state.oct_inv4), {
-            let (base, mask) = take_group!(state);
-            if group(&ray, base, mask) {
+            if test(&ray, take_group!(state)) {
                 found = true;
                 break 'search;
             }
@@ -202,9 +207,9 @@ mod tests {
         let bvh = build_cwbvh_from_tris(&tris, BvhBuildParams::medium_build(), &mut Duration::default());
         let test = |r: &Ray, slot: usize| tris[bvh.primitive_indices[slot] as usize].intersect(r);
         // One primitive at a time, as obvhs's closures see them.
-        let nearest = |r: &Ray, base: u32, mask: u32| {
+        let nearest = |r: &Ray, group: Group| {
             let mut best: Option<(u32, f32)> = None;
-            for slot in slots(base, mask) {
+            for slot in group.slots() {
                 let t = test(r, slot as usize);
                 if t < best.map_or(r.tmax, |b| b.1) {
                     best = Some((slot, t));
@@ -212,7 +217,7 @@ mod tests {
             }
             best
         };
-        let blocked_by = |r: &Ray, base: u32, mask: u32| slots(base, mask).any(|slot| test(r, slot as usize) < r.tmax);
+        let blocked_by = |r: &Ray, group: Group| group.slots().any(|slot| test(r, slot as usize) < r.tmax);
         let mut u = numbers(5);
         let (mut hits, mut blocked) = (0, 0);
         for _ in 0..5000 {

@@ -8,14 +8,14 @@
 //! triangles load eight to a register, and one pass tests them all. The wide test does the
 //! scalar test's arithmetic, operation by operation in the same order (glam's dot: products,
 //! then sums left to right; its cross: one product rounded, the other subtracted from it in
-//! a fused multiply-add where the build has FMA, as x86-64-v3 has), and the group's hits are then taken in the order obvhs's
-//! traversal visits them (highest slot first, a hit kept only when nearer than the nearest so
-//! far), so every hit, distance and barycentric is the scalar loop's, bit for bit
+//! a fused multiply-add where the build has FMA, as x86-64-v3 has), and the group's hits
+//! are then taken in the order obvhs's traversal visits them (highest slot first, a hit kept
+//! only when nearer than the nearest so far), so every hit, distance and barycentric is the scalar loop's, bit for bit
 //! (`wide_test_is_the_scalar_test`).
 
 use glam::Vec3A;
 
-use super::traverse::slots;
+use super::traverse::Group;
 
 /// Nine coordinate planes (x0, y0, z0, x1, …, z2), each `len + PAD` long.
 pub struct Triangles {
@@ -91,22 +91,21 @@ impl Triangles {
         [Vec3A::new(c(0), c(1), c(2)), Vec3A::new(c(3), c(4), c(5)), Vec3A::new(c(6), c(7), c(8))]
     }
 
-    /// The nearest hit closer than `tmax` among slots `base + i` for the bits `i` of `mask`
-    /// that `accept(slot, b1, b2)` keeps, taken as obvhs's traversal takes a group: highest
-    /// bit first, a hit replacing the one kept only when strictly nearer.
+    /// The nearest hit closer than `tmax` among the slots of `group` that `accept(slot, b1,
+    /// b2)` keeps, taken as obvhs's traversal takes a group: highest slot first, a hit
+    /// replacing the one kept only when strictly nearer.
     #[inline(always)]
     pub fn closest_in_group(
         &self,
         o: Vec3A,
         d: Vec3A,
         tmax: f32,
-        base: u32,
-        mask: u32,
+        group: Group,
         accept: &impl Fn(u32, f32, f32) -> bool,
     ) -> Option<GroupHit> {
         let mut best = None;
         let mut tmax = tmax;
-        self.for_each_hit(o, d, base, mask, |slot, t, b1, b2| {
+        self.for_each_hit(o, d, group, |slot, t, b1, b2| {
             if t < tmax && accept(slot, b1, b2) {
                 best = Some((slot, t, b1, b2));
                 tmax = t;
@@ -124,37 +123,29 @@ impl Triangles {
         o: Vec3A,
         d: Vec3A,
         tmax: f32,
-        base: u32,
-        mask: u32,
+        group: Group,
         accept: &impl Fn(u32, f32, f32) -> bool,
     ) -> bool {
-        self.for_each_hit(o, d, base, mask, |slot, t, b1, b2| t < tmax && accept(slot, b1, b2))
+        self.for_each_hit(o, d, group, |slot, t, b1, b2| t < tmax && accept(slot, b1, b2))
     }
 
     /// Calls `f(slot, t, b1, b2)` for every triangle of the group the ray meets at `t > 0`,
     /// highest slot first, until it returns true; returns whether one did.
     #[inline(always)]
-    fn for_each_hit(
-        &self,
-        o: Vec3A,
-        d: Vec3A,
-        base: u32,
-        mask: u32,
-        mut f: impl FnMut(u32, f32, f32, f32) -> bool,
-    ) -> bool {
+    fn for_each_hit(&self, o: Vec3A, d: Vec3A, group: Group, mut f: impl FnMut(u32, f32, f32, f32) -> bool) -> bool {
         #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
         {
             // Eight slots a register, the highest eight first.
             for chunk in (0..3).rev() {
-                let lanes = (mask >> (8 * chunk)) & 0xff;
+                let lanes = (group.mask >> (8 * chunk)) & 0xff;
                 if lanes == 0 {
                     continue;
                 }
-                let first = base + 8 * chunk;
+                let first = group.base + 8 * chunk;
                 // SAFETY: AVX2 is compiled in (and checked at start-up, `crate::cpu`); the
                 // group's slots are real triangles and the planes are padded past the last.
                 let hits = unsafe { self.test8(o, d, first as usize) };
-                for slot in slots(first, hits.mask & lanes) {
+                for slot in (Group { base: first, mask: hits.mask & lanes }).slots() {
                     let l = (slot - first) as usize;
                     if f(slot, hits.t[l], hits.b1[l], hits.b2[l]) {
                         return true;
@@ -165,7 +156,7 @@ impl Triangles {
         }
         #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
         {
-            slots(base, mask).any(|slot| {
+            group.slots().any(|slot| {
                 intersect(self.vertices(slot), o, d, 0.0, f32::INFINITY).is_some_and(|(t, b1, b2)| f(slot, t, b1, b2))
             })
         }
@@ -256,9 +247,9 @@ mod tests {
     use crate::sampling::test_numbers as numbers;
 
     /// Slot by slot with the scalar test, as obvhs's traversal would: the reference.
-    fn scalar_closest(tris: &[[Vec3A; 3]], o: Vec3A, d: Vec3A, tmax: f32, base: u32, mask: u32) -> Option<GroupHit> {
+    fn scalar_closest(tris: &[[Vec3A; 3]], o: Vec3A, d: Vec3A, tmax: f32, group: Group) -> Option<GroupHit> {
         let (mut best, mut tmax) = (None, tmax);
-        for slot in slots(base, mask) {
+        for slot in group.slots() {
             if let Some((t, b1, b2)) = intersect(tris[slot as usize], o, d, 0.0, tmax) {
                 best = Some((slot, t, b1, b2));
                 tmax = t;
@@ -301,14 +292,15 @@ mod tests {
             let base = (u() * (tris.len() - 1) as f32) as u32;
             let width = (tris.len() as u32 - base).min(24);
             let mask = ((u() * (1u64 << 24) as f32) as u32 | 1) & ((1u32 << width) - 1).max(1);
-            let want = scalar_closest(&tris, o, d, tmax, base, mask);
-            let got = store.closest_in_group(o, d, tmax, base, mask, &|_, _, _| true);
+            let group = Group { base, mask };
+            let want = scalar_closest(&tris, o, d, tmax, group);
+            let got = store.closest_in_group(o, d, tmax, group, &|_, _, _| true);
             assert_eq!(
                 got.map(|h| (h.0, h.1.to_bits(), h.2.to_bits(), h.3.to_bits())),
                 want.map(|h| (h.0, h.1.to_bits(), h.2.to_bits(), h.3.to_bits())),
                 "o {o} d {d} base {base} mask {mask:#x}"
             );
-            assert_eq!(store.any_in_group(o, d, tmax, base, mask, &|_, _, _| true), want.is_some());
+            assert_eq!(store.any_in_group(o, d, tmax, group, &|_, _, _| true), want.is_some());
             hits += want.is_some() as u32;
             groups += 1;
         }
@@ -318,15 +310,16 @@ mod tests {
     #[test]
     fn refused_hits_let_farther_ones_through() {
         // Two parallel triangles across the z axis at z = 1 and z = 2; a ray up the axis.
+        let (both, second) = (Group { base: 0, mask: 0b11 }, Group { base: 0, mask: 0b10 });
         let at = |z: f32| [Vec3A::new(-1.0, -1.0, z), Vec3A::new(1.0, -1.0, z), Vec3A::new(0.0, 1.0, z)];
         let store = Triangles::new(&[at(1.0), at(2.0)]);
         let (o, d) = (Vec3A::ZERO, Vec3A::Z);
-        let near = store.closest_in_group(o, d, f32::INFINITY, 0, 0b11, &|_, _, _| true).unwrap();
+        let near = store.closest_in_group(o, d, f32::INFINITY, both, &|_, _, _| true).unwrap();
         assert_eq!((near.0, near.1), (0, 1.0));
-        let far = store.closest_in_group(o, d, f32::INFINITY, 0, 0b11, &|slot, _, _| slot != 0).unwrap();
+        let far = store.closest_in_group(o, d, f32::INFINITY, both, &|slot, _, _| slot != 0).unwrap();
         assert_eq!((far.0, far.1), (1, 2.0));
-        assert!(store.closest_in_group(o, d, 1.5, 0, 0b11, &|slot, _, _| slot != 0).is_none());
-        assert!(!store.any_in_group(o, d, 1.5, 0, 0b10, &|_, _, _| true));
-        assert!(store.any_in_group(o, d, 2.5, 0, 0b10, &|_, _, _| true));
+        assert!(store.closest_in_group(o, d, 1.5, both, &|slot, _, _| slot != 0).is_none());
+        assert!(!store.any_in_group(o, d, 1.5, second, &|_, _, _| true));
+        assert!(store.any_in_group(o, d, 2.5, second, &|_, _, _| true));
     }
 }
