@@ -1,6 +1,7 @@
 #![allow(missing_docs)] // criterion_group! generates undocumented items
 //! Light selection: the cost of one `sample` + the `pmf` MIS needs, per sampler, at 10² to 10⁶
-//! lights; and the light tree's build time (`cargo bench --bench light_samplers`).
+//! lights (`cells` at 10² only: above its 256 lights it is the tree); and the light tree's
+//! build time (`cargo bench --bench light_samplers`).
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use myriad::light::{AreaEmission, Light, LightId, TriangleLight};
@@ -34,8 +35,11 @@ fn selection(c: &mut Criterion) {
     let mut group = c.benchmark_group("light_select");
     for n in [100usize, 10_000, 1_000_000] {
         let lights = triangles(n);
+        let cells = (n <= myriad::light_sampler::CELLS_MAX_LIGHTS).then_some(LightSamplerKind::Cells);
         for kind in
             [LightSamplerKind::Uniform, LightSamplerKind::Power, LightSamplerKind::Local, LightSamplerKind::Tree]
+                .into_iter()
+                .chain(cells)
         {
             if kind == LightSamplerKind::Local && n > 10_000 {
                 group.sample_size(10);

@@ -13,14 +13,15 @@
 //! lamp or a point light close by, a spot's cone edge through the cell), the table would
 //! starve it there: the cell is split into its eight halves, each built the same way when a
 //! point first lands in it, down to [`SPLITS`] halvings, below which the light tree chooses
-//! at the point itself. Elsewhere a choice is a binary search in the cell's
-//! [`Distribution1D`] (lights in `local`'s Morton order), with no importance evaluated,
-//! where the tree evaluates four on every level it descends.
+//! at the point itself. Elsewhere a choice is a count over the cell's [`Table16`] (lights in
+//! `local`'s Morton order, 2¹⁶ values shared among them: with the uniform share each of at
+//! most [`MAX_LIGHTS`] lights owns at least 25), with no importance evaluated, where the
+//! tree evaluates four on every level it descends.
 //!
 //! A cell's content is a pure function of the cell, so which thread builds it first changes
 //! nothing: images are bit-identical for any thread count and any split of the samples, and
 //! the pmf at a BSDF hit is the one the light was sampled with (the same cell, the same table
-//! or the same tree). Only cells that shading points reach are built, 8 bytes per light each
+//! or the same tree). Only cells that shading points reach are built, 2 bytes per light each
 //! ([`most_bytes`] bounds them); the sampler takes [`MIN_LIGHTS`] to [`MAX_LIGHTS`] lights
 //! (outside, or where the bound passes a quarter of the memory limit, `LightStrategy::build`
 //! builds the `tree` in its place, and the render summary says so).
@@ -33,7 +34,7 @@ use super::tree::LightTree;
 use super::{LightSampler, SampledLight, ShadingContext};
 use crate::light::{Light, LightId};
 use crate::math::Vec3A;
-use crate::math::distribution::Distribution1D;
+use crate::math::distribution::Table16;
 
 /// Grid cells along the scene's radius (a cell's edge is radius / this).
 pub const CELLS_PER_RADIUS: f32 = 8.0;
@@ -47,12 +48,18 @@ pub const TRUST: f32 = 4.0;
 /// the tree's 2.9e-4, 0.86 of its efficiency; panels.glb, 4 lights: 0.93–1.12 of the tree's
 /// efficiency over four runs of `tools/equal_time.py`, no clear gain).
 pub const MIN_LIGHTS: usize = 8;
-/// Halvings of a grid cell whose table would not do, before the tree takes over (two gave
-/// the same error on cornell_grid_7.glb, for nine times the most memory).
-pub const SPLITS: u32 = 1;
-/// Most lights the sampler takes (a cell's table is 8 bytes per light; at 1024 lights the
-/// tables cost more time than they save: cornell-32x32 0.88 of the tree's efficiency).
+/// Halvings of a grid cell whose table would not do, before the tree takes over. Two leave
+/// fewer points to the tree's costlier choice: on glass.glb, where the points around the
+/// bulb's globe are the ones split, 102 small cells on the tree instead of 40 larger ones,
+/// and `cells` CPU time 0.97× (one halving: `cells` 1.16× the time of `power`, two: 1.14×;
+/// medians of 12–15 pairs); the error on cornell_grid_7.glb is the same. The bound on
+/// memory ([`most_bytes`]) grows nine times with it.
+pub const SPLITS: u32 = 2;
+/// Most lights the sampler takes (at 1024 lights the tables cost more time than they save:
+/// cornell-32x32 0.88 of the tree's efficiency, measured with 8-byte table entries). With
+/// the uniform share, each of this many lights owns at least 25 of a table's 2¹⁶ values.
 pub const MAX_LIGHTS: usize = 256;
+const _: () = assert!(MAX_LIGHTS <= Table16::MAX && UNIFORM_SHARE / MAX_LIGHTS as f32 * 65536.0 >= 25.0);
 /// Cells along each axis of the grid.
 const SIDE: usize = 2 * CELLS_PER_RADIUS as usize + 1;
 /// Normal bins: ±x, ±y, ±z and none.
@@ -62,7 +69,7 @@ const BINS: usize = 7;
 #[derive(Debug)]
 enum Cell {
     /// The cell's own table.
-    Table(Distribution1D),
+    Table(Table16),
     /// Its eight halves, built on first use (octant bit 0: upper x, bit 1: y, bit 2: z).
     Split(Box<[OnceLock<Cell>; 8]>),
     /// The light tree, at the point itself.
@@ -75,7 +82,7 @@ enum Cell {
 pub fn most_bytes(lights: usize) -> u64 {
     let grid = (SIDE * SIDE * SIDE * BINS) as u64;
     let cells_per_grid_cell: u64 = (0..=SPLITS).map(|l| 8u64.pow(l)).sum();
-    let table = (lights * 8 + std::mem::size_of::<Cell>()) as u64;
+    let table = (Table16::bytes_for(lights) + std::mem::size_of::<Cell>()) as u64;
     grid * (cells_per_grid_cell * (table + std::mem::size_of::<OnceLock<Cell>>() as u64))
 }
 
@@ -171,7 +178,7 @@ impl CellSampler {
         let memory_bytes = self.local.memory_bytes()
             + self.tree.stats().memory_bytes
             + (self.cells.len() + 8 * splits) * std::mem::size_of::<OnceLock<Cell>>()
-            + tables * self.local.lights() * 8;
+            + tables * Table16::bytes_for(self.local.lights());
         CellStats { edge: self.edge, tables, splits, on_tree, memory_bytes }
     }
 
@@ -193,7 +200,7 @@ impl CellSampler {
     /// What chooses at `ctx`: the table of the smallest cell holding it, or the tree. Cells
     /// are built on first use.
     #[inline]
-    fn choice(&self, ctx: &ShadingContext) -> Option<&Distribution1D> {
+    fn choice(&self, ctx: &ShadingContext) -> Option<&Table16> {
         let (index, mut corner, n) = self.grid_cell(ctx);
         let (mut edge, mut level) = (self.edge, 0);
         let mut cell = self.cells[index].get_or_init(|| self.build(corner, edge, n, level));
@@ -246,7 +253,7 @@ impl CellSampler {
     /// corners (a surface through the cube may pass near any of them), or `None` when at
     /// one of those points some light would get more than [`TRUST`] times the table's
     /// probability.
-    fn table(&self, corner: Vec3A, edge: f32, n: Vec3A) -> Option<Distribution1D> {
+    fn table(&self, corner: Vec3A, edge: f32, n: Vec3A) -> Option<Table16> {
         let count = self.local.lights();
         let points = (0..8)
             .map(|k| corner + Vec3A::new((k & 1) as f32, ((k >> 1) & 1) as f32, (k >> 2) as f32) * edge)
@@ -269,7 +276,7 @@ impl CellSampler {
             return None;
         }
         let weights: Vec<f32> = probabilities.iter().map(|&p| p as f32).collect();
-        Some(Distribution1D::new(&weights).expect("every weight has the positive uniform share"))
+        Some(Table16::new(&weights).expect("every weight has the positive uniform share"))
     }
 }
 
@@ -278,8 +285,8 @@ impl LightSampler for CellSampler {
     fn sample(&self, ctx: &ShadingContext, u: u64) -> Option<SampledLight> {
         match self.choice(ctx) {
             Some(t) => {
-                let s = t.sample(u);
-                Some(SampledLight { light: self.local.light_at(s.index), pmf: s.pmf })
+                let (index, pmf) = t.sample(u);
+                Some(SampledLight { light: self.local.light_at(index), pmf })
             }
             None => self.tree.sample(ctx, u),
         }
@@ -319,15 +326,17 @@ mod tests {
         let lights = lamps(40);
         let s = sampler(&lights);
         // Above the lamps, facing up: no lamp faces this point, so only the uniform share is
-        // left, and it is even.
+        // left, and it is even, up to the one of a table's 2¹⁶ values a light may get more
+        // or less than its share.
+        let value = 1.0 / 65536.0;
         let above = ShadingContext { p: Vec3A::new(1.0, 3.5, 1.0), n: Vec3A::Y };
         for l in 0..40 {
-            assert!((s.pmf(&above, LightId(l)) * 40.0 - 1.0).abs() < 1e-4);
+            assert!((s.pmf(&above, LightId(l)) - 1.0 / 40.0).abs() <= value);
         }
         let below = ShadingContext { p: Vec3A::new(0.2, 0.0, 0.2), n: Vec3A::Y };
         assert!(s.choice(&below).is_some(), "2 m from the lamps a table will do");
         for l in 0..40 {
-            assert!(s.pmf(&below, LightId(l)) >= 0.999 * UNIFORM_SHARE / 40.0);
+            assert!(s.pmf(&below, LightId(l)) >= UNIFORM_SHARE / 40.0 - value);
         }
         assert!(s.pmf(&below, LightId(0)) > 2.0 * s.pmf(&below, LightId(39)), "the near lamp weighs more");
         check_tiling(&s, &below, 40);

@@ -15,7 +15,9 @@ mod power;
 mod tree;
 mod uniform;
 
-pub use cells::{CellSampler, CellStats, MAX_LIGHTS as CELLS_MAX_LIGHTS, MIN_LIGHTS as CELLS_MIN_LIGHTS};
+pub use cells::{
+    CellSampler, CellStats, MAX_LIGHTS as CELLS_MAX_LIGHTS, MIN_LIGHTS as CELLS_MIN_LIGHTS, SPLITS as CELLS_SPLITS,
+};
 pub use learned::{DEFENSIVE, LEARN_UNTIL, LEVELS, LearnedLayout, LearnedSampler, LearnedStats, Observations};
 pub use local::LocalSampler;
 pub use power::PowerSampler;
