@@ -372,6 +372,13 @@ mod tests {
     }
 
     #[test]
+    fn the_worst_case_memory_leaves_cells_to_machines_of_8_gb() {
+        // Limit 3/4 of 8 GB, a quarter of it for the sampler.
+        let most = most_bytes(MAX_LIGHTS);
+        assert!(most <= 8_000_000_000 / 4 * 3 / 4, "{most}");
+    }
+
+    #[test]
     fn a_clone_builds_the_same_cells() {
         let lights = lamps(20);
         let a = sampler(&lights);

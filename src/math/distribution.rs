@@ -2,11 +2,12 @@
 //!
 //! Owns: [`Split`], the one rule every light sampler uses to share the 2⁶⁴ equally likely
 //! values of a selection number among weights, and [`Distribution1D`], a table of that rule
-//! (the `power` sampler). A weight's *cell* is the run of values that choose it, so its
+//! (the `power` sampler), and [`Table16`], the rule over 2¹⁶ values for a few positive weights
+//! (`cells`' per-cell tables). A weight's *cell* is the run of values that choose it, so its
 //! probability is exactly `cell width / 2⁶⁴`: the pmf a sampler reports is the probability it
-//! realises, not an approximation of it (an f32 CDF drawn with a 24-bit number, as before,
-//! gave each of 10⁶ lights 16 or 17 of 2²⁴ values, up to 5 % off its reported pmf, and never
-//! chose a light below 2⁻²⁴).
+//! realises, not an approximation of it (an f32 CDF drawn with a 24-bit number, as before, gave
+//! each of 10⁶ lights 16 or 17 of 2²⁴ values, up to 5 % off its reported pmf, and never chose a
+//! light below 2⁻²⁴).
 //!
 //! The rule: with `P` positive weights summing to `T` over a range of `R` values, the cell of
 //! weight `i` ends at `positive(≤ i) + ⌊acc(≤ i) / T · (R − P)⌋`, and the last positive cell
