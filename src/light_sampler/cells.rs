@@ -59,7 +59,7 @@ pub const SPLITS: u32 = 2;
 /// cornell-32x32 0.88 of the tree's efficiency, measured with 8-byte table entries). With
 /// the uniform share, each of this many lights owns at least 25 of a table's 2¹⁶ values.
 pub const MAX_LIGHTS: usize = 256;
-const _: () = assert!(MAX_LIGHTS <= Table16::MAX && UNIFORM_SHARE / MAX_LIGHTS as f32 * 65536.0 >= 25.0);
+const _: () = assert!(MAX_LIGHTS <= Table16::MAX && UNIFORM_SHARE / MAX_LIGHTS as f32 * Table16::VALUES as f32 >= 25.0);
 /// Cells along each axis of the grid.
 const SIDE: usize = 2 * CELLS_PER_RADIUS as usize + 1;
 /// Normal bins: ±x, ±y, ±z and none.
@@ -328,7 +328,7 @@ mod tests {
         // Above the lamps, facing up: no lamp faces this point, so only the uniform share is
         // left, and it is even, up to the one of a table's 2¹⁶ values a light may get more
         // or less than its share.
-        let value = 1.0 / 65536.0;
+        let value = 1.0 / Table16::VALUES as f32;
         let above = ShadingContext { p: Vec3A::new(1.0, 3.5, 1.0), n: Vec3A::Y };
         for l in 0..40 {
             assert!((s.pmf(&above, LightId(l)) - 1.0 / 40.0).abs() <= value);

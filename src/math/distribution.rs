@@ -225,7 +225,9 @@ impl Table16 {
     /// Most entries: each must own at least one of the 2¹⁶ values, and the weights of
     /// more than this many would be shared out too coarsely for a table of this kind.
     pub const MAX: usize = 4096;
-    /// Entries compared at once.
+    /// The values it shares among its entries.
+    pub const VALUES: u32 = 1 << 16;
+    /// The table is padded to a multiple of this many entries (one 256-bit compare).
     const LANES: usize = 16;
     /// Bits a selection number is shifted by: its top 16 choose.
     const SHIFT: u32 = 48;
@@ -237,10 +239,10 @@ impl Table16 {
         if !fine {
             return None;
         }
-        let mut split = Split::new(1 << 16, weights.iter().copied())?;
+        let mut split = Split::new(Self::VALUES as u128, weights.iter().copied())?;
         let mut lasts: Vec<u16> = weights.iter().map(|&w| (split.next(w).1 - 1) as u16).collect();
         lasts.pop();
-        lasts.resize(lasts.len().next_multiple_of(Self::LANES).max(Self::LANES), u16::MAX);
+        lasts.resize(Self::padded(weights.len()), u16::MAX);
         Some(Self { lasts: lasts.into_boxed_slice(), len: weights.len() as u16 })
     }
 
@@ -259,7 +261,7 @@ impl Table16 {
     pub fn cell(&self, index: usize) -> (u128, u128) {
         assert!(index < self.len(), "index {index} out of {} entries", self.len);
         let start = if index == 0 { 0 } else { self.lasts[index - 1] as u128 + 1 };
-        let end = if index + 1 == self.len() { 1 << 16 } else { self.lasts[index] as u128 + 1 };
+        let end = if index + 1 == self.len() { Self::VALUES as u128 } else { self.lasts[index] as u128 + 1 };
         (start << Self::SHIFT, end << Self::SHIFT)
     }
 
@@ -280,7 +282,12 @@ impl Table16 {
 
     /// Bytes a table of `len` entries holds.
     pub fn bytes_for(len: usize) -> usize {
-        len.saturating_sub(1).next_multiple_of(Self::LANES).max(Self::LANES) * 2
+        Self::padded(len) * std::mem::size_of::<u16>()
+    }
+
+    /// Stored values for `len` entries: the last values of all but the last, padded.
+    fn padded(len: usize) -> usize {
+        len.saturating_sub(1).next_multiple_of(Self::LANES).max(Self::LANES)
     }
 }
 
@@ -385,7 +392,7 @@ mod tests {
             assert_eq!(t.len(), n);
             assert_eq!(t.memory_bytes(), Table16::bytes_for(n));
             // The same cells as the rule over 2¹⁶ values, scaled to 2⁶⁴.
-            let rule = cells(1 << 16, &w);
+            let rule = cells(Table16::VALUES as u128, &w);
             let mut end = 0u128;
             for (i, &(a, b)) in rule.iter().enumerate() {
                 let (start, stop) = t.cell(i);
