@@ -53,7 +53,7 @@ pub const MIN_LIGHTS: usize = 8;
 /// bulb's globe are the ones split, 102 small cells on the tree instead of 40 larger ones,
 /// and `cells` CPU time 0.97× (one halving: `cells` 1.16× the time of `power`, two: 1.14×;
 /// medians of 12–15 pairs); the error on cornell_grid_7.glb is the same. The bound on
-/// memory ([`most_bytes`]) grows nine times with it.
+/// memory ([`most_bytes`]) grows eight times with it.
 pub const SPLITS: u32 = 2;
 /// Most lights the sampler takes (at 1024 lights the tables cost more time than they save:
 /// cornell-32x32 0.88 of the tree's efficiency, measured with 8-byte table entries). With
@@ -77,13 +77,15 @@ enum Cell {
 }
 
 /// The most bytes a sampler over `lights` lights can come to: every grid cell and bin
-/// reached and split as far as [`SPLITS`] allows. `LightStrategy::build` uses the tree
-/// instead when this passes a quarter of the memory limit ([`takes`]).
+/// reached and split as far as [`SPLITS`] allows, a slot for each cell and its halves, and a
+/// table in each of the smallest (a split cell has none, so at most 8^[`SPLITS`] tables a
+/// grid cell). `LightStrategy::build` uses the tree instead when this passes a quarter of
+/// the memory limit ([`takes`]).
 pub fn most_bytes(lights: usize) -> u64 {
     let grid = (SIDE * SIDE * SIDE * BINS) as u64;
-    let cells_per_grid_cell: u64 = (0..=SPLITS).map(|l| 8u64.pow(l)).sum();
-    let table = (Table16::bytes_for(lights) + std::mem::size_of::<Cell>()) as u64;
-    grid * (cells_per_grid_cell * (table + std::mem::size_of::<OnceLock<Cell>>() as u64))
+    let slots: u64 = (0..=SPLITS).map(|l| 8u64.pow(l)).sum();
+    let tables = 8u64.pow(SPLITS);
+    grid * (slots * std::mem::size_of::<OnceLock<Cell>>() as u64 + tables * Table16::bytes_for(lights) as u64)
 }
 
 /// Whether a sampler over `lights` lights takes them: [`MIN_LIGHTS`] to [`MAX_LIGHTS`], with
@@ -117,6 +119,8 @@ pub struct CellSampler {
     origin: Vec3A,
     /// Edge of a cell.
     edge: f32,
+    /// Its reciprocal.
+    per_edge: f32,
     /// Every grid cell, built on first use.
     cells: Vec<OnceLock<Cell>>,
     /// Cells built so far with a table, split, and left to the tree.
@@ -164,6 +168,7 @@ impl CellSampler {
             tree: LightTree::new(lights),
             origin: centre - Vec3A::splat(radius),
             edge: radius / CELLS_PER_RADIUS,
+            per_edge: CELLS_PER_RADIUS / radius,
             cells: empty_cells(),
             tables: AtomicUsize::new(0),
             splits: AtomicUsize::new(0),
@@ -182,28 +187,45 @@ impl CellSampler {
         CellStats { edge: self.edge, tables, splits, on_tree, memory_bytes }
     }
 
+    /// The tree's choice, out of line: it is the rare case, and inlined beside the table's
+    /// it would crowd the hot loop's code out of the instruction cache.
+    #[inline(never)]
+    fn tree_sample(&self, ctx: &ShadingContext, u: u64) -> Option<SampledLight> {
+        self.tree.sample(ctx, u)
+    }
+
+    /// The tree's cell, out of line (see [`tree_sample`](Self::tree_sample)).
+    #[inline(never)]
+    fn tree_cell(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
+        self.tree.cell(ctx, light)
+    }
+
     /// The light tree it chooses with where a table would not do.
     pub fn tree(&self) -> &LightTree {
         &self.tree
     }
 
     /// The grid cell of `ctx` (its position clamped to the grid, and its normal bin): its
-    /// index, its lowest corner and the normal it is built for.
+    /// index and its lowest corner.
     #[inline]
-    fn grid_cell(&self, ctx: &ShadingContext) -> (usize, Vec3A, Vec3A) {
-        let q = ((ctx.p - self.origin) / self.edge).floor().clamp(Vec3A::ZERO, Vec3A::splat((SIDE - 1) as f32));
-        let bin = super::normal_bin(ctx.n);
-        let index = (((q.x as usize * SIDE) + q.y as usize) * SIDE + q.z as usize) * BINS + bin;
-        (index, self.origin + q * self.edge, bin_normal(bin))
+    fn grid_cell(&self, ctx: &ShadingContext) -> (usize, Vec3A) {
+        let f = ((ctx.p - self.origin) * self.per_edge).clamp(Vec3A::ZERO, Vec3A::splat(SIDE as f32 - 0.5));
+        // Non-negative, so truncation floors (one instruction a lane, where glam's `floor`
+        // takes several); whole numbers below 2²⁴ throughout, so exact in f32: one
+        // conversion for the three.
+        let q = Vec3A::new(f.x.trunc(), f.y.trunc(), f.z.trunc());
+        let flat = q.dot(Vec3A::new((SIDE * SIDE) as f32, SIDE as f32, 1.0)) as u32 as usize;
+        (flat * BINS + super::normal_bin(ctx.n), self.origin + q * self.edge)
     }
 
     /// What chooses at `ctx`: the table of the smallest cell holding it, or the tree. Cells
     /// are built on first use.
     #[inline]
     fn choice(&self, ctx: &ShadingContext) -> Option<&Table16> {
-        let (index, mut corner, n) = self.grid_cell(ctx);
+        let (index, mut corner) = self.grid_cell(ctx);
         let (mut edge, mut level) = (self.edge, 0);
-        let mut cell = self.cells[index].get_or_init(|| self.build(corner, edge, n, level));
+        let bin = index % BINS;
+        let mut cell = self.built(&self.cells[index], corner, edge, bin, level);
         loop {
             match cell {
                 Cell::Table(t) => return Some(t),
@@ -212,10 +234,27 @@ impl CellSampler {
                     (edge, level) = (0.5 * edge, level + 1);
                     let upper = (ctx.p - corner).cmpge(Vec3A::splat(edge));
                     corner += Vec3A::select(upper, Vec3A::splat(edge), Vec3A::ZERO);
-                    cell = octants[upper.bitmask() as usize].get_or_init(|| self.build(corner, edge, n, level));
+                    cell = self.built(&octants[upper.bitmask() as usize], corner, edge, bin, level);
                 }
             }
         }
+    }
+
+    /// The cell in `slot`, built (see [`build`](Self::build)) if no point has reached it yet.
+    #[inline(always)]
+    fn built<'a>(&self, slot: &'a OnceLock<Cell>, corner: Vec3A, edge: f32, bin: usize, level: u32) -> &'a Cell {
+        match slot.get() {
+            Some(cell) => cell,
+            None => self.first_use(slot, corner, edge, bin, level),
+        }
+    }
+
+    /// [`built`](Self::built)'s rare case, out of line so that the common one keeps its
+    /// arguments in registers.
+    #[cold]
+    #[inline(never)]
+    fn first_use<'a>(&self, slot: &'a OnceLock<Cell>, corner: Vec3A, edge: f32, bin: usize, level: u32) -> &'a Cell {
+        slot.get_or_init(|| self.build(corner, edge, bin, level))
     }
 
     /// Every light's importance at `p` along `n` as a share of their sum (`None` when all
@@ -227,10 +266,10 @@ impl CellSampler {
     }
 
     /// The cube at `corner` of edge `edge`, `level` halvings below the grid, for receivers
-    /// along `n`: its [`table`](Self::table), or where none will do, its eight halves (the
-    /// tree below [`SPLITS`] halvings).
-    fn build(&self, corner: Vec3A, edge: f32, n: Vec3A, level: u32) -> Cell {
-        let cell = self.table(corner, edge, n).map_or_else(
+    /// of normal bin `bin`: its [`table`](Self::table), or where none will do, its eight
+    /// halves (the tree below [`SPLITS`] halvings).
+    fn build(&self, corner: Vec3A, edge: f32, bin: usize, level: u32) -> Cell {
+        let cell = self.table(corner, edge, bin_normal(bin)).map_or_else(
             || {
                 if level < SPLITS {
                     Cell::Split(Box::new(std::array::from_fn(|_| OnceLock::new())))
@@ -288,7 +327,7 @@ impl LightSampler for CellSampler {
                 let (index, pmf) = t.sample(u);
                 Some(SampledLight { light: self.local.light_at(index), pmf })
             }
-            None => self.tree.sample(ctx, u),
+            None => self.tree_sample(ctx, u),
         }
     }
 
@@ -296,7 +335,7 @@ impl LightSampler for CellSampler {
     fn cell(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
         match self.choice(ctx) {
             Some(t) => t.cell(self.local.slot_of(light)),
-            None => self.tree.cell(ctx, light),
+            None => self.tree_cell(ctx, light),
         }
     }
 }
