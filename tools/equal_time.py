@@ -8,7 +8,7 @@ Runs `myriad compare SCENE --samplers uniform,power,tree,cells --time T --seeds 
 rendered once with `tree` at `--reference-spp` and cached per scene) on `scenes/*.ron`
 (except the 102 400-lamp grid, whose uniform runs say little in seconds) and the Blender
 exports in `tests/data/blender/`, or on the scenes given, and prints each sampler's
-efficiency (1 / (relMSE · seconds), mean over the seeds), the default's (`cells`) ratio to the
+efficiency (1 / (relMSE · seconds) of the means over the seeds), the default's (`cells`) ratio to the
 best of `uniform` and `power`, and its ratio to `tree`; `--also S,...` adds samplers and each
 one's ratio to `tree`. Only
 the Python standard library is used.

@@ -98,6 +98,10 @@ fn compare_writes_every_output_and_the_reports_agree() {
             assert!((a - b).abs() <= 1e-3 * b.abs() + 1e-9, "{name}: table {a} vs json {b}");
         }
         assert_eq!(s["spp"]["mean"].as_f64().unwrap(), 8.0);
+        // The efficiency of the mean error and time, not the mean of the runs' efficiencies.
+        let (rel_mse, seconds) = (s["rel_mse"]["mean"].as_f64().unwrap(), s["seconds"]["mean"].as_f64().unwrap());
+        let efficiency = s["efficiency"]["mean"].as_f64().unwrap();
+        assert!((efficiency * rel_mse * seconds - 1.0).abs() < 1e-9, "{name}: {efficiency} vs {rel_mse}, {seconds}");
         assert!(!s["bias"]["flagged"].as_bool().unwrap(), "{name} flagged as biased: {}", s["bias"]);
     }
     // Running again reuses the cached reference.
