@@ -308,10 +308,10 @@ impl fmt::Display for RenderReport {
         if let Some(c) = &self.cells {
             writeln!(
                 f,
-                "cells      {} tables in cells of {:.3} m and their parts (halved up to {} times: {} split, {} left to the tree), {}",
+                "cells      {} tables in cells of {:.3} m and their parts (halvings up to {}: {} split, {} left to the tree), {}",
                 c.tables,
                 c.edge,
-                crate::light_sampler::CELLS_SPLITS,
+                c.halvings,
                 c.splits,
                 c.on_tree,
                 human_bytes(c.memory_bytes as u64)

@@ -12,7 +12,8 @@
 //! nine points some light would get more than [`TRUST`] times the table's probability (a
 //! lamp or a point light close by, a spot's cone edge through the cell), the table would
 //! starve it there: the cell is split into its eight halves, each built the same way when a
-//! point first lands in it, down to [`SPLITS`] halvings, below which the light tree chooses
+//! point first lands in it, down to [`SPLITS`] halvings (fewer where memory is short:
+//! [`halvings`]), below which the light tree chooses
 //! at the point itself. Elsewhere a choice is a count over the cell's [`Table16`] (lights in
 //! `local`'s Morton order, 2¹⁶ values shared among them: with the uniform share each of at
 //! most [`MAX_LIGHTS`] lights owns at least 25), with no importance evaluated, where the
@@ -22,9 +23,10 @@
 //! nothing: images are bit-identical for any thread count and any split of the samples, and
 //! the pmf at a BSDF hit is the one the light was sampled with (the same cell, the same table
 //! or the same tree). Only cells that shading points reach are built, 2 bytes per light each
-//! ([`most_bytes`] bounds them); the sampler takes [`MIN_LIGHTS`] to [`MAX_LIGHTS`] lights
-//! (outside, or where the bound passes a quarter of the memory limit, `LightStrategy::build`
-//! builds the `tree` in its place, and the render summary says so).
+//! ([`most_bytes`] bounds them, and [`halvings`] keeps the bound within a quarter of the
+//! memory limit); the sampler takes [`MIN_LIGHTS`] to [`MAX_LIGHTS`] lights (outside, or
+//! where not even whole grid cells fit, `LightStrategy::build` builds the `tree` in its
+//! place, and the render summary says so).
 
 use std::sync::OnceLock;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -53,13 +55,17 @@ pub const MIN_LIGHTS: usize = 8;
 /// bulb's globe are the ones split, 102 small cells on the tree instead of 40 larger ones,
 /// and `cells` CPU time 0.97× (one halving: `cells` 1.16× the time of `power`, two: 1.14×;
 /// medians of 12–15 pairs); the error on cornell_grid_7.glb is the same. The bound on
-/// memory ([`most_bytes`]) grows eight times with it.
+/// memory ([`most_bytes`]) grows eight times with it, so a sampler halves fewer times where
+/// that bound would not fit ([`halvings`]).
 pub const SPLITS: u32 = 2;
-/// Most lights the sampler takes (at 1024 lights the tables cost more time than they save:
-/// cornell-32x32 0.88 of the tree's efficiency, measured with 8-byte table entries). With
-/// the uniform share, each of this many lights owns at least 25 of a table's 2¹⁶ values.
-pub const MAX_LIGHTS: usize = 256;
-const _: () = assert!(MAX_LIGHTS <= Table16::MAX && UNIFORM_SHARE / MAX_LIGHTS as f32 * Table16::VALUES as f32 >= 25.0);
+/// Most lights the sampler takes. With 16-bit tables drawn through their summary, 1024
+/// pays: cornell-32x32, 64 spp, 8 seeds, relMSE·spp 0.289 against the tree's 0.309 and
+/// uniform's 0.411, at 7241 instructions a sample against 9831 and 6901; offices.ron, 768
+/// lights, 0.137 against the tree's 0.146 at 18 252 instructions against 24 743 (with
+/// 8-byte tables cornell-32x32 had been 0.88 of the tree's efficiency). With the uniform
+/// share each of this many lights owns at least 6 of a table's 2¹⁶ values.
+pub const MAX_LIGHTS: usize = 1024;
+const _: () = assert!(MAX_LIGHTS <= Table16::MAX && UNIFORM_SHARE / MAX_LIGHTS as f32 * Table16::VALUES as f32 >= 6.0);
 /// Cells along each axis of the grid.
 const SIDE: usize = 2 * CELLS_PER_RADIUS as usize + 1;
 /// Normal bins: ±x, ±y, ±z and none.
@@ -76,23 +82,30 @@ enum Cell {
     Tree,
 }
 
-/// The most bytes a sampler over `lights` lights can come to: every grid cell and bin
-/// reached and split as far as [`SPLITS`] allows, a slot for each cell and its halves, and a
-/// table in each of the smallest (a split cell has none, so at most 8^[`SPLITS`] tables a
-/// grid cell). `LightStrategy::build` uses the tree instead when this passes a quarter of
-/// the memory limit ([`takes`]).
-pub fn most_bytes(lights: usize) -> u64 {
+/// The most bytes a sampler over `lights` lights halving its cells up to `splits` times can
+/// come to: every grid cell and bin reached and split as far as it may, a slot for each
+/// cell and its halves, and a table in each of the smallest (a split cell has none, so at
+/// most 8^`splits` tables a grid cell).
+pub fn most_bytes(lights: usize, splits: u32) -> u64 {
     let grid = (SIDE * SIDE * SIDE * BINS) as u64;
-    let slots: u64 = (0..=SPLITS).map(|l| 8u64.pow(l)).sum();
-    let tables = 8u64.pow(SPLITS);
+    let slots: u64 = (0..=splits).map(|l| 8u64.pow(l)).sum();
+    let tables = 8u64.pow(splits);
     grid * (slots * std::mem::size_of::<OnceLock<Cell>>() as u64 + tables * Table16::bytes_for(lights) as u64)
 }
 
-/// Whether a sampler over `lights` lights takes them: [`MIN_LIGHTS`] to [`MAX_LIGHTS`], with
-/// its [`most_bytes`] within a quarter of the memory limit (otherwise the tree does better,
-/// or the tables might not fit).
-pub fn takes(lights: usize) -> bool {
-    (MIN_LIGHTS..=MAX_LIGHTS).contains(&lights) && most_bytes(lights) <= crate::limits::memory_limit().bytes / 4
+/// How many times a sampler over `lights` lights halves its cells: up to [`SPLITS`], as
+/// many as keep [`most_bytes`] within a quarter of the memory limit (1.30 GB at 256 lights
+/// and two halvings, 0.61 GB at 1024 and one). `None` outside [`MIN_LIGHTS`] to
+/// [`MAX_LIGHTS`], or where not even whole grid cells fit: `LightStrategy::build` builds
+/// the tree there instead.
+pub fn halvings(lights: usize) -> Option<u32> {
+    halvings_within(lights, crate::limits::memory_limit().bytes / 4)
+}
+
+/// [`halvings`] with `budget` bytes for the sampler.
+fn halvings_within(lights: usize, budget: u64) -> Option<u32> {
+    let fits = |splits: &u32| most_bytes(lights, *splits) <= budget;
+    (MIN_LIGHTS..=MAX_LIGHTS).contains(&lights).then(|| (0..=SPLITS).rev().find(fits)).flatten()
 }
 
 /// What a [`CellSampler`] has built, for the render summary.
@@ -100,6 +113,8 @@ pub fn takes(lights: usize) -> bool {
 pub struct CellStats {
     /// Edge of a grid cell.
     pub edge: f32,
+    /// Most halvings of a grid cell ([`halvings`]).
+    pub halvings: u32,
     /// Cells (grid cells and halves of them) with a table.
     pub tables: usize,
     /// Cells split into halves.
@@ -119,6 +134,8 @@ pub struct CellSampler {
     origin: Vec3A,
     /// Edge of a cell.
     edge: f32,
+    /// Most halvings of a grid cell before the tree takes over.
+    halvings: u32,
     /// Its reciprocal.
     per_edge: f32,
     /// Every grid cell, built on first use.
@@ -159,9 +176,11 @@ fn bin_normal(bin: usize) -> Vec3A {
 
 impl CellSampler {
     /// A sampler over `lights` (1 to [`MAX_LIGHTS`]) in a scene whose bounding sphere has
-    /// centre `centre` and radius `radius`.
-    pub fn new(lights: &[Light], centre: Vec3A, radius: f32) -> Self {
+    /// centre `centre` and radius `radius`, halving its cells up to `halvings` (at most
+    /// [`SPLITS`]) times.
+    pub fn new(lights: &[Light], centre: Vec3A, radius: f32, halvings: u32) -> Self {
         assert!(!lights.is_empty() && lights.len() <= MAX_LIGHTS, "1 to {MAX_LIGHTS} lights");
+        assert!(halvings <= SPLITS, "at most {SPLITS} halvings");
         let radius = radius.max(1e-6);
         Self {
             local: LocalSampler::new(lights),
@@ -169,6 +188,7 @@ impl CellSampler {
             origin: centre - Vec3A::splat(radius),
             edge: radius / CELLS_PER_RADIUS,
             per_edge: CELLS_PER_RADIUS / radius,
+            halvings,
             cells: empty_cells(),
             tables: AtomicUsize::new(0),
             splits: AtomicUsize::new(0),
@@ -184,7 +204,7 @@ impl CellSampler {
             + self.tree.stats().memory_bytes
             + (self.cells.len() + 8 * splits) * std::mem::size_of::<OnceLock<Cell>>()
             + tables * Table16::bytes_for(self.local.lights());
-        CellStats { edge: self.edge, tables, splits, on_tree, memory_bytes }
+        CellStats { edge: self.edge, halvings: self.halvings, tables, splits, on_tree, memory_bytes }
     }
 
     /// The tree's choice, out of line: it is the rare case, and inlined beside the table's
@@ -267,11 +287,11 @@ impl CellSampler {
 
     /// The cube at `corner` of edge `edge`, `level` halvings below the grid, for receivers
     /// of normal bin `bin`: its [`table`](Self::table), or where none will do, its eight
-    /// halves (the tree below [`SPLITS`] halvings).
+    /// halves (the tree below its most halvings).
     fn build(&self, corner: Vec3A, edge: f32, bin: usize, level: u32) -> Cell {
         let cell = self.table(corner, edge, bin_normal(bin)).map_or_else(
             || {
-                if level < SPLITS {
+                if level < self.halvings {
                     Cell::Split(Box::new(std::array::from_fn(|_| OnceLock::new())))
                 } else {
                     Cell::Tree
@@ -357,7 +377,7 @@ mod tests {
     }
 
     fn sampler(lights: &[Light]) -> CellSampler {
-        CellSampler::new(lights, Vec3A::new(1.75, 1.5, 1.0), 4.0)
+        CellSampler::new(lights, Vec3A::new(1.75, 1.5, 1.0), 4.0, SPLITS)
     }
 
     #[test]
@@ -411,10 +431,18 @@ mod tests {
     }
 
     #[test]
-    fn the_worst_case_memory_leaves_cells_to_machines_of_8_gb() {
+    fn on_a_machine_of_8_gb_cells_halve_twice_at_256_lights_and_once_at_512_to_1024() {
         // Limit 3/4 of 8 GB, a quarter of it for the sampler.
-        let most = most_bytes(MAX_LIGHTS);
-        assert!(most <= 8_000_000_000 / 4 * 3 / 4, "{most}");
+        let budget = 8_000_000_000 / 4 * 3 / 4;
+        assert_eq!(halvings_within(MIN_LIGHTS - 1, budget), None);
+        assert_eq!(halvings_within(256, budget), Some(2));
+        assert_eq!(halvings_within(512, budget), Some(1));
+        assert_eq!(halvings_within(MAX_LIGHTS, budget), Some(1));
+        assert_eq!(halvings_within(MAX_LIGHTS + 1, budget), None);
+        assert!(most_bytes(MAX_LIGHTS, 1) <= budget && most_bytes(MAX_LIGHTS, 2) > budget);
+        // With little memory, whole grid cells only, then the tree.
+        assert_eq!(halvings_within(MAX_LIGHTS, most_bytes(MAX_LIGHTS, 0)), Some(0));
+        assert_eq!(halvings_within(MAX_LIGHTS, most_bytes(MAX_LIGHTS, 0) - 1), None);
     }
 
     #[test]

@@ -15,9 +15,7 @@ mod power;
 mod tree;
 mod uniform;
 
-pub use cells::{
-    CellSampler, CellStats, MAX_LIGHTS as CELLS_MAX_LIGHTS, MIN_LIGHTS as CELLS_MIN_LIGHTS, SPLITS as CELLS_SPLITS,
-};
+pub use cells::{CellSampler, CellStats, MAX_LIGHTS as CELLS_MAX_LIGHTS, MIN_LIGHTS as CELLS_MIN_LIGHTS};
 pub use learned::{DEFENSIVE, LEARN_UNTIL, LEVELS, LearnedLayout, LearnedSampler, LearnedStats, Observations};
 pub use local::LocalSampler;
 pub use power::PowerSampler;
@@ -200,14 +198,15 @@ impl LightStrategy {
             LightSamplerKind::Learned => {
                 LightStrategy::One(AnyLightSampler::Learned(LearnedSampler::new(lights, scene_centre, scene_radius)))
             }
-            LightSamplerKind::Cells if !cells::takes(lights.len()) => {
-                LightStrategy::One(AnyLightSampler::Tree(LightTree::new(lights)))
-            }
-            LightSamplerKind::Cells => LightStrategy::One(AnyLightSampler::Cells(Box::new(CellSampler::new(
-                lights,
-                scene_centre,
-                scene_radius,
-            )))),
+            LightSamplerKind::Cells => match cells::halvings(lights.len()) {
+                Some(halvings) => LightStrategy::One(AnyLightSampler::Cells(Box::new(CellSampler::new(
+                    lights,
+                    scene_centre,
+                    scene_radius,
+                    halvings,
+                )))),
+                None => LightStrategy::One(AnyLightSampler::Tree(LightTree::new(lights))),
+            },
         }
     }
 
