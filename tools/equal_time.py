@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Does the default sampler win at equal time? `myriad compare` on every shipped scene.
 
-    python3 tools/equal_time.py [--time 2] [--seeds 2] [--resolution 160x120]
+    python3 tools/equal_time.py [--time 2 | --spp N] [--seeds 2] [--resolution 160x120]
         [--reference-spp 512] [--out target/equal-time] [--also local] [SCENE ...]
 
 Runs `myriad compare SCENE --samplers uniform,power,tree,cells --time T --seeds K` (the reference
@@ -10,8 +10,14 @@ rendered once with `tree` at `--reference-spp` and cached per scene) on `scenes/
 exports in `tests/data/blender/`, or on the scenes given, and prints each sampler's
 efficiency (1 / (relMSE · seconds) of the means over the seeds), the default's (`cells`) ratio to the
 best of `uniform` and `power`, and its ratio to `tree`; `--also S,...` adds samplers and each
-one's ratio to `tree`. Only
-the Python standard library is used.
+one's ratio to `tree`.
+
+With `--spp N` every run renders N samples instead and the efficiency is still
+1 / (relMSE · seconds): for an unbiased estimator relMSE falls as 1/spp, so this measures
+the same quantity as equal time, and since at equal spp every sampler traces the same
+camera rays and BSDF directions, a rare caustic firefly lands in every sampler's image
+alike instead of in whichever happened to render one pass more. Only the Python standard
+library is used.
 """
 
 import argparse
@@ -34,6 +40,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("scenes", nargs="*", type=Path)
     ap.add_argument("--time", default="2")
+    ap.add_argument("--spp", help="equal spp instead of equal time (the efficiency is the same quantity)")
     ap.add_argument("--seeds", default="2")
     ap.add_argument("--resolution", default="160x120")
     ap.add_argument("--reference-spp", default="512")
@@ -50,7 +57,8 @@ def main():
             + "".join(f" {s} ÷ tree |" for s in ratios), "|---|---:|" + "---:|" * (len(samplers) + 1 + len(ratios))]
     for scene in args.scenes or default_scenes():
         out = args.out / scene.stem
-        cmd = [args.myriad, "compare", str(scene), "--samplers", ",".join(samplers), "--time", args.time,
+        budget = ["--spp", args.spp] if args.spp else ["--time", args.time]
+        cmd = [args.myriad, "compare", str(scene), "--samplers", ",".join(samplers), *budget,
                "--seeds", args.seeds, "--resolution", args.resolution, "--reference-spp", args.reference_spp,
                "--reference-sampler", "tree", "--out-dir", str(out), "-q"]
         subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)

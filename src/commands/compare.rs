@@ -3,7 +3,9 @@
 //! convergence plot and reports.
 //!
 //! Every sampler renders with the same seeds (1..=K), so at equal spp the camera rays and
-//! BSDF directions are identical and differences come from the light choice alone. The
+//! BSDF directions are identical and differences come from the light choice alone. Runs go
+//! seed by seed, every sampler in turn, so that at equal time a machine's changing speed
+//! touches every sampler alike. The
 //! reference is rendered with a seed no compared run uses (or given), and cached in the
 //! output folder under a key of everything that determines it.
 
@@ -415,28 +417,36 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
         None => String::new(),
     };
     let runs_from = opts.runs.as_deref().map(|d| (d, scene_hash.as_str()));
+    let mut samplers: Vec<SamplerRuns> =
+        plan.samplers.iter().map(|&kind| SamplerRuns::build(kind, &loaded.scene, size)).collect();
+    // Seed by seed, every sampler in turn: a machine that slows down or speeds up during the
+    // comparison (a busy neighbour, a warming CPU) touches every sampler alike, where
+    // sampler after sampler it would favour whichever ran in the quiet minutes.
+    for &seed in &plan.seeds {
+        for s in &mut samplers {
+            s.run(opts, &plan, &loaded, runs_from, seed, &reference)?;
+        }
+    }
     let mut results = Vec::new();
     // The least noisy run's own noise and image, to judge the reference's noise by.
-    let mut quietest: Option<(f64, Vec<Rgb>)> = None;
-    // Each sampler's first-seed image, for the HTML page.
-    let mut images = Vec::new();
-    for &kind in &plan.samplers {
-        let runs = run_sampler(opts, &plan, &loaded, runs_from, kind, &reference)?;
-        let means = runs.first.means();
-        images.push(means.clone());
-        let variance: Vec<Rgb> = (0..means.len()).map(|i| runs.first.variance_of_mean(i)).collect();
-        let noise = relative_noise(&variance, &means);
-        if quietest.as_ref().is_none_or(|q| noise < q.0) {
-            quietest = Some((noise, means));
+    let mut quietest: Option<(f64, &[Rgb])> = None;
+    for s in &samplers {
+        let first = s.first.as_ref().expect("a plan has at least one seed");
+        if quietest.is_none_or(|q| first.noise < q.0) {
+            quietest = Some((first.noise, &first.pixels));
         }
-        let (result, column) = record_sampler(opts, &plan, runs, &reference)?;
+    }
+    if let Some((run_noise, image)) = quietest {
+        judge_reference(&mut reference.info, &reference.variance, image, run_noise);
+    }
+    let finished: Vec<_> = samplers.into_iter().map(|s| s.finish(&plan, &reference)).collect();
+    let mut pictures = vec![reference.pixels];
+    for (result, column, pixels) in finished {
         results.push(result);
         columns.push(column);
+        pictures.push(pixels);
     }
     rank(&mut results);
-    if let Some((run_noise, image)) = &quietest {
-        judge_reference(&mut reference.info, &reference.variance, image, *run_noise);
-    }
     let report = CompareReport {
         scene: opts.scene.display().to_string(),
         mode: plan.mode(),
@@ -447,22 +457,30 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
         samplers: results,
         files: Vec::new(),
     };
-    let mut pictures = vec![reference.pixels];
-    pictures.extend(images);
     write_report(opts, report, &columns, &pictures)
 }
 
-/// One sampler's renders over every seed.
+/// One sampler's renders, seed after seed: its strategy built once, each run's numbers, the
+/// statistics over seeds, and what the first seed's run left for the report.
 struct SamplerRuns {
     kind: LightSamplerKind,
+    strategy: LightStrategy,
     build_seconds: f64,
+    /// The most the strategy held in any run (a learning one holds more once it has learned).
     memory_bytes: usize,
     runs: Vec<RunResult>,
-    /// The first seed's film: the render written and shown.
-    first: Film,
-    /// The mean over seeds and that mean's variance, for the bias check.
-    mean: Vec<Rgb>,
-    mean_variance: Vec<Rgb>,
+    seeds: SeedStatistics,
+    first: Option<FirstRun>,
+}
+
+/// The first seed's run, once its render and error map are written: what the report and the
+/// contact sheet show of it.
+struct FirstRun {
+    pixels: Vec<Rgb>,
+    /// Its own noise (relMSE of its variance of the mean), to judge the reference by.
+    noise: f64,
+    column: SheetColumn,
+    files: Vec<String>,
 }
 
 /// Watches one run: its progress bar, and the relMSE after every pass.
@@ -543,39 +561,43 @@ fn load_run(dir: &Path, plan: &Plan, scene_hash: &str, kind: LightSamplerKind, s
     Ok(Run { film, seconds: h.render_seconds, convergence: Vec::new() })
 }
 
-/// Renders (or, with `runs`, reads) `kind` with every seed of the plan and measures each run
-/// against the reference.
-fn run_sampler(
-    opts: &CompareOptions,
-    plan: &Plan,
-    loaded: &LoadedScene,
-    runs_from: Option<(&Path, &str)>,
-    kind: LightSamplerKind,
-    reference: &Reference,
-) -> Result<SamplerRuns> {
-    let scene = &loaded.scene;
-    let t = Instant::now();
-    let strategy = LightStrategy::build(kind, &scene.lights, scene.center, scene.radius);
-    let build_seconds = t.elapsed().as_secs_f64();
-    let mut seeds = SeedStatistics::new(reference.pixels.len());
-    let (mut runs, mut first) = (Vec::new(), None);
-    // A learning sampler holds more once it has learned: report the largest it held.
-    let mut memory_bytes = strategy.memory_bytes();
-    for &seed in &plan.seeds {
+impl SamplerRuns {
+    /// Builds `kind`'s strategy for `scene` and times the build.
+    fn build(kind: LightSamplerKind, scene: &Scene, size: UVec2) -> Self {
+        let t = Instant::now();
+        let strategy = LightStrategy::build(kind, &scene.lights, scene.center, scene.radius);
+        let build_seconds = t.elapsed().as_secs_f64();
+        let memory_bytes = strategy.memory_bytes();
+        let seeds = SeedStatistics::new((size.x * size.y) as usize);
+        Self { kind, strategy, build_seconds, memory_bytes, runs: Vec::new(), seeds, first: None }
+    }
+
+    /// Renders (or, with `runs`, reads) the run with `seed` and measures it against the
+    /// reference; the first one's render and error map are written.
+    fn run(
+        &mut self,
+        opts: &CompareOptions,
+        plan: &Plan,
+        loaded: &LoadedScene,
+        runs_from: Option<(&Path, &str)>,
+        seed: u64,
+        reference: &Reference,
+    ) -> Result<()> {
+        let kind = self.kind;
         let run = match runs_from {
             Some((dir, hash)) => load_run(dir, plan, hash, kind, seed)?,
             None => {
                 // A fresh copy per seed: `cells` builds its tables during a run, and a later
                 // seed must pay for them again to be timed fairly.
-                let fresh = strategy.clone();
-                let (run, memory) = render_run(opts, plan, scene, &fresh, kind, seed, reference)?;
-                memory_bytes = memory_bytes.max(memory).max(fresh.memory_bytes());
+                let fresh = self.strategy.clone();
+                let (run, memory) = render_run(opts, plan, &loaded.scene, &fresh, kind, seed, reference)?;
+                self.memory_bytes = self.memory_bytes.max(memory).max(fresh.memory_bytes());
                 run
             }
         };
         let m = error_metrics(&run.film.means(), &reference.pixels)?;
-        seeds.add(&run.film);
-        runs.push(RunResult {
+        self.seeds.add(&run.film);
+        let result = RunResult {
             seed,
             seconds: run.seconds,
             spp: run.film.spp(),
@@ -584,12 +606,41 @@ fn run_sampler(
             efficiency: efficiency(m.rel_mse, run.seconds),
             // A run rendered elsewhere shows only where it ended.
             convergence: if run.convergence.is_empty() { vec![(run.seconds, m.rel_mse)] } else { run.convergence },
-        });
-        first.get_or_insert(run.film);
+        };
+        if self.first.is_none() {
+            self.first = Some(write_first(opts, plan, kind, &run.film, &result, reference)?);
+        }
+        self.runs.push(result);
+        Ok(())
     }
-    let (mean, mean_variance) = seeds.finish();
-    let first = first.expect("a plan has at least one seed");
-    Ok(SamplerRuns { kind, build_seconds, memory_bytes, runs, first, mean, mean_variance })
+
+    /// The sampler's numbers over its seeds, its contact-sheet column and its first image.
+    fn finish(self, plan: &Plan, reference: &Reference) -> (SamplerResult, SheetColumn, Vec<Rgb>) {
+        let first = self.first.expect("a plan has at least one seed");
+        let (mean, mean_variance) = self.seeds.finish();
+        let stat = |f: &dyn Fn(&RunResult) -> f64| Stat::of(&self.runs.iter().map(f).collect::<Vec<_>>());
+        let (seconds, rel_mse) = (stat(&|r| r.seconds), stat(&|r| r.rel_mse));
+        // The efficiency of the mean error, not the mean of the runs' efficiencies: the mean of
+        // 1/relMSE rewards a sampler whose error is mostly low and now and then huge (`power`'s
+        // fireflies on glass.glb, 64 spp: 14 of 16 seeds at relMSE·spp 12–15, two at 71 and
+        // 1475), where the time to reach an error is set by its expectation.
+        let efficiency = Stat { mean: efficiency(rel_mse.mean, seconds.mean), std: stat(&|r| r.efficiency).std };
+        let result = SamplerResult {
+            sampler: self.kind.name().into(),
+            build_seconds: self.build_seconds,
+            memory_bytes: self.memory_bytes,
+            seconds,
+            spp: stat(&|r| r.spp as f64),
+            mse: stat(&|r| r.mse),
+            rel_mse,
+            efficiency,
+            efficiency_vs_best: 0.0,
+            bias: bias_check(&mean, &mean_variance, &reference.pixels, &reference.variance, plan.bias_alpha()),
+            files: first.files,
+            runs: self.runs,
+        };
+        (result, first.column, first.pixels)
+    }
 }
 
 /// The mean image over seeds and the variance of that mean.
@@ -639,57 +690,37 @@ impl SeedStatistics {
     }
 }
 
-/// Writes a sampler's render and error map and turns its runs into the report's numbers and
-/// the contact sheet's column.
-fn record_sampler(
+/// Writes the render and error map of a sampler's first run and keeps what the report shows
+/// of it.
+fn write_first(
     opts: &CompareOptions,
     plan: &Plan,
-    s: SamplerRuns,
+    kind: LightSamplerKind,
+    film: &Film,
+    run: &RunResult,
     reference: &Reference,
-) -> Result<(SamplerResult, SheetColumn)> {
+) -> Result<FirstRun> {
     let size = plan.resolution;
-    let pixels = s.first.means();
-    let (exr, err_png) =
-        (opts.out_dir.join(format!("{}.exr", s.kind)), opts.out_dir.join(format!("{}-error.png", s.kind)));
+    let pixels = film.means();
+    let (exr, err_png) = (opts.out_dir.join(format!("{kind}.exr")), opts.out_dir.join(format!("{kind}-error.png")));
     let stats = crate::render::RenderStats {
-        spp: s.runs[0].spp,
-        elapsed: std::time::Duration::from_secs_f64(s.runs[0].seconds),
+        spp: run.spp,
+        elapsed: std::time::Duration::from_secs_f64(run.seconds),
         ..Default::default()
     };
-    let meta =
-        super::render::provenance(&opts.scene.display().to_string(), s.kind, &plan.settings(s.runs[0].seed), &stats);
-    crate::io::exr::write(&exr, &s.first.layers(AovSet::default()), &meta)?;
+    let meta = super::render::provenance(&opts.scene.display().to_string(), kind, &plan.settings(run.seed), &stats);
+    crate::io::exr::write(&exr, &film.layers(AovSet::default()), &meta)?;
     let errors = error_picture(size, &relative_error_map(&pixels, &reference.pixels));
     crate::io::png::write_srgb8(&err_png, size, errors.bytes.clone())?;
-    let stat = |f: &dyn Fn(&RunResult) -> f64| Stat::of(&s.runs.iter().map(f).collect::<Vec<_>>());
-    let first = &s.runs[0];
     let column = SheetColumn {
-        title: s.kind.name().into(),
-        caption: format!("{} spp, {:.2} s\nrelMSE {}", first.spp, first.seconds, num(first.rel_mse)),
+        title: kind.name().into(),
+        caption: format!("{} spp, {:.2} s\nrelMSE {}", run.spp, run.seconds, num(run.rel_mse)),
         render: preview_picture(size, &pixels, opts.exposure),
         error: Some(errors),
     };
-    let (seconds, rel_mse) = (stat(&|r| r.seconds), stat(&|r| r.rel_mse));
-    // The efficiency of the mean error, not the mean of the runs' efficiencies: the mean of
-    // 1/relMSE rewards a sampler whose error is mostly low and now and then huge (`power`'s
-    // fireflies on glass.glb, 64 spp: 14 of 16 seeds at relMSE·spp 12–15, two at 71 and
-    // 1475), where the time to reach an error is set by its expectation.
-    let efficiency = Stat { mean: efficiency(rel_mse.mean, seconds.mean), std: stat(&|r| r.efficiency).std };
-    let result = SamplerResult {
-        sampler: s.kind.name().into(),
-        build_seconds: s.build_seconds,
-        memory_bytes: s.memory_bytes,
-        seconds,
-        spp: stat(&|r| r.spp as f64),
-        mse: stat(&|r| r.mse),
-        rel_mse,
-        efficiency,
-        efficiency_vs_best: 0.0,
-        bias: bias_check(&s.mean, &s.mean_variance, &reference.pixels, &reference.variance, plan.bias_alpha()),
-        files: vec![file_name(&exr), file_name(&err_png)],
-        runs: s.runs,
-    };
-    Ok((result, column))
+    let variance: Vec<Rgb> = (0..pixels.len()).map(|i| film.variance_of_mean(i)).collect();
+    let noise = relative_noise(&variance, &pixels);
+    Ok(FirstRun { pixels, noise, column, files: vec![file_name(&exr), file_name(&err_png)] })
 }
 
 /// Each sampler's efficiency against the best one's.

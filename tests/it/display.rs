@@ -1,6 +1,7 @@
 //! `render --display`: a fake tev server on a local port reads the packets as tev would
 //! (CreateImage, then UpdateImage V3 after every pass) and the last image it got is the EXR
-//! the render wrote; with nothing listening, a warning and the render goes on.
+//! the render wrote; with nothing listening, a warning and the render goes on. `compare`
+//! streams its runs seed by seed, every sampler in turn.
 
 use std::io::Read;
 use std::net::TcpListener;
@@ -10,10 +11,11 @@ use myriad::io::exr;
 
 use crate::split::myriad;
 
-/// What the fake tev saw: the channel names the image was created with, and the channels of
-/// the last update, by name.
+/// What the fake tev saw: the image's name and the channel names it was created with, and
+/// the channels of the last update, by name.
 #[derive(Default)]
 struct Seen {
+    name: String,
     created: Vec<String>,
     updates: usize,
     last: Vec<(String, Vec<f32>)>,
@@ -28,7 +30,8 @@ fn parse(bytes: &[u8]) -> Seen {
         let mut p = Packet { b: &bytes[at + 5..at + len], i: 0 };
         match bytes[at + 4] {
             4 => {
-                let (_focus, _name, _w, _h) = (p.u8(), p.string(), p.u32(), p.u32());
+                let (_focus, name, _w, _h) = (p.u8(), p.string(), p.u32(), p.u32());
+                seen.name = name;
                 let n = p.u32();
                 seen.created = (0..n).map(|_| p.string()).collect();
             }
@@ -88,16 +91,27 @@ impl Packet<'_> {
     }
 }
 
-#[test]
-fn the_last_image_tev_gets_is_the_exr_the_render_wrote() {
+/// A fake tev on a free local port that reads `connections` connections one after another;
+/// the port, and what it saw on each.
+fn fake_tev(connections: usize) -> (u16, std::thread::JoinHandle<Vec<Seen>>) {
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();
     let port = listener.local_addr().unwrap().port();
     let server = std::thread::spawn(move || {
-        let (mut socket, _) = listener.accept().unwrap();
-        let mut bytes = Vec::new();
-        socket.read_to_end(&mut bytes).unwrap();
-        parse(&bytes)
+        (0..connections)
+            .map(|_| {
+                let (mut socket, _) = listener.accept().unwrap();
+                let mut bytes = Vec::new();
+                socket.read_to_end(&mut bytes).unwrap();
+                parse(&bytes)
+            })
+            .collect()
     });
+    (port, server)
+}
+
+#[test]
+fn the_last_image_tev_gets_is_the_exr_the_render_wrote() {
+    let (port, server) = fake_tev(1);
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let out = myriad(
@@ -117,7 +131,7 @@ fn the_last_image_tev_gets_is_the_exr_the_render_wrote() {
         d,
     );
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let seen = server.join().unwrap();
+    let seen = server.join().unwrap().pop().unwrap();
     assert_eq!(seen.created, ["R", "G", "B", "albedo.R", "albedo.G", "albedo.B"]);
     assert!(seen.updates >= 4, "one update a pass (1, 1, 2, 4 spp): {}", seen.updates);
     let (layers, _) = exr::read(&d.join("out.exr")).unwrap();
@@ -141,4 +155,20 @@ fn without_tev_listening_the_render_warns_and_goes_on() {
     assert!(out.status.success(), "{err}");
     assert!(err.contains("no tev display") && err.contains(&port.to_string()), "{err}");
     assert!(Path::new(&dir.path().join("out.exr")).exists());
+}
+
+#[test]
+fn compare_runs_seed_by_seed_every_sampler_in_turn() {
+    // Sampler after sampler, a machine that slowed down for a minute would favour whichever
+    // ran outside it at equal time.
+    let (port, server) = fake_tev(4);
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-5x5.ron");
+    let args = ["compare", "--samplers", "uniform,power", "--seeds", "2", "--spp", "2", "--reference-spp", "4"];
+    let port = port.to_string();
+    let more = [scene.to_str().unwrap(), "--resolution", "16x12", "--display", &port, "-q"];
+    let out = myriad(&[&args[..], &more].concat(), dir.path());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let names: Vec<String> = server.join().unwrap().into_iter().map(|s| s.name).collect();
+    assert_eq!(names, ["uniform seed 1", "power seed 1", "uniform seed 2", "power seed 2"]);
 }
