@@ -1,7 +1,7 @@
 //! What emissive triangles and quads share: radiance, sidedness and the area-to-solid-angle
 //! density conversion.
 
-use crate::math::{Rgb, Vec3A, luminance};
+use crate::math::{Rgb, Vec3A};
 use std::f32::consts::PI;
 
 /// Emission of a diffuse area light.
@@ -30,10 +30,10 @@ impl AreaEmission {
         if cos <= 0.0 || dist2 == 0.0 { 0.0 } else { dist2 / (cos * area) }
     }
 
-    /// Emitted power: π·A·Y(L), doubled when two-sided.
-    pub fn power(&self, area: f32) -> f32 {
+    /// Emitted flux per channel: π·A·L, doubled when two-sided.
+    pub fn flux(&self, area: f32) -> Rgb {
         let sides = if self.two_sided { 2.0 } else { 1.0 };
-        PI * area * luminance(self.radiance) * sides
+        PI * area * sides * self.radiance
     }
 
     /// Builds the sample for point `q` (front normal `n`) seen from `p`; `None` when the

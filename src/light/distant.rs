@@ -1,7 +1,7 @@
 //! Directional light ("sun") at infinity.
 
 use super::LightSample;
-use crate::math::{Rgb, Vec3A, luminance};
+use crate::math::{Rgb, Vec3A};
 use std::f32::consts::PI;
 
 /// Parallel light of irradiance `irradiance` [W/m²] (measured perpendicular to the beam).
@@ -27,8 +27,8 @@ impl DistantLight {
         })
     }
 
-    /// Power through a disk of the scene's bounding radius: π·r²·Y(E).
-    pub fn power(&self, scene_radius: f32) -> f32 {
-        PI * scene_radius * scene_radius * luminance(self.irradiance)
+    /// Flux per channel through a disk of the scene's bounding radius: π·r²·E.
+    pub fn flux(&self, scene_radius: f32) -> Rgb {
+        PI * scene_radius * scene_radius * self.irradiance
     }
 }

@@ -169,10 +169,10 @@ impl EnvironmentLight {
         self.radiance * self.map.as_ref().map_or(Rgb::ONE, |m| m.mean)
     }
 
-    /// Power through a disk of the scene's bounding radius: π·r² times the irradiance a
-    /// uniform environment of the mean radiance gives, π·Y(L̄).
-    pub fn power(&self, scene_radius: f32) -> f32 {
-        PI * scene_radius * scene_radius * PI * luminance(self.mean_radiance())
+    /// Flux per channel through a disk of the scene's bounding radius: π·r² times the
+    /// irradiance a uniform environment of the mean radiance gives, π·L̄.
+    pub fn flux(&self, scene_radius: f32) -> Rgb {
+        PI * scene_radius * scene_radius * PI * self.mean_radiance()
     }
 }
 

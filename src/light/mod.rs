@@ -3,9 +3,12 @@
 //!
 //! Owns: the closed set [`Light`] (one struct per kind, one file each) and [`LightSample`].
 //! Units (docs/conventions.md): area lights carry radiance [W/(m²·sr)], point and spot lights
-//! radiant intensity [W/sr], directional lights irradiance [W/m²]. Powers are in watts of
-//! luminance (Rec.709 Y), the scalar the `power` sampler compares. Depends on `math` and
-//! `sampling` (for the numbers that pick points).
+//! radiant intensity [W/sr], directional lights irradiance [W/m²]. [`Light::flux`] is per
+//! channel; powers are its luminance (Rec.709 Y), the watts that reports and the power limit
+//! speak. Samplers compare lights by the brightest channel instead (the `power` sampler that
+//! of the flux, the tree that of `LightBounds::phi`, as pbrt-v4 does), so that a blue lamp is
+//! not starved for its low luminance where blue is all that lights a wall. Depends on `math`
+//! and `sampling` (for the numbers that pick points).
 
 mod area;
 mod bounds;
@@ -26,7 +29,7 @@ pub use spot::{SpotCurve, SpotLight};
 pub use triangle::{EmissionTexture, TriangleLight};
 
 use crate::material::Image;
-use crate::math::{Rgb, Vec2, Vec3A};
+use crate::math::{Rgb, Vec2, Vec3A, luminance};
 use crate::sampling::unit_f32;
 
 /// Index of a light in the scene's light list.
@@ -109,16 +112,21 @@ impl Light {
         }
     }
 
-    /// Emitted power in watts (luminance); `scene_radius` sizes directional lights.
-    pub fn power(&self, scene_radius: f32) -> f32 {
+    /// Emitted flux per channel, in watts; `scene_radius` sizes directional lights.
+    pub fn flux(&self, scene_radius: f32) -> Rgb {
         match self {
-            Light::Point(l) => l.power(),
-            Light::Spot(l) => l.power(),
-            Light::Distant(l) => l.power(scene_radius),
-            Light::Triangle(l) => AreaEmission { radiance: l.mean_radiance(), ..l.emission }.power(l.area),
-            Light::Quad(l) => l.emission.power(l.area),
-            Light::Environment(l) => l.power(scene_radius),
+            Light::Point(l) => l.flux(),
+            Light::Spot(l) => l.flux(),
+            Light::Distant(l) => l.flux(scene_radius),
+            Light::Triangle(l) => AreaEmission { radiance: l.mean_radiance(), ..l.emission }.flux(l.area),
+            Light::Quad(l) => l.emission.flux(l.area),
+            Light::Environment(l) => l.flux(scene_radius),
         }
+    }
+
+    /// Emitted power in watts (luminance of [`Light::flux`]), what reports and limits speak.
+    pub fn power(&self, scene_radius: f32) -> f32 {
+        luminance(self.flux(scene_radius))
     }
 
     /// True for lights no ray can hit (point, spot, directional).

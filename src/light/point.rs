@@ -1,7 +1,7 @@
 //! Isotropic point light.
 
 use super::LightSample;
-use crate::math::{Rgb, Vec3A, luminance};
+use crate::math::{Rgb, Vec3A};
 use std::f32::consts::PI;
 
 /// A point light of radiant intensity `intensity` [W/sr].
@@ -38,8 +38,8 @@ impl PointLight {
         delta_sample(self.position, p, |_, dist2| Some(self.intensity / dist2))
     }
 
-    /// 4π·Y(I).
-    pub fn power(&self) -> f32 {
-        4.0 * PI * luminance(self.intensity)
+    /// Flux per channel, 4π·I.
+    pub fn flux(&self) -> Rgb {
+        4.0 * PI * self.intensity
     }
 }

@@ -4,7 +4,7 @@
 //! where Cycles' blend puts the inner cosine at `cos_outer + (1 − cos_outer)·blend`.
 
 use super::LightSample;
-use crate::math::{Rgb, Vec3A, luminance};
+use crate::math::{Rgb, Vec3A};
 use std::f32::consts::PI;
 
 /// How a spot light fades between its inner and outer cones.
@@ -55,9 +55,10 @@ impl SpotLight {
         })
     }
 
-    /// Power estimate 2π·Y(I)·(1 − (cos_inner + cos_outer)/2) (pbrt-v4's approximation).
-    pub fn power(&self) -> f32 {
-        2.0 * PI * luminance(self.intensity) * (1.0 - 0.5 * (self.cos_inner + self.cos_outer))
+    /// Flux estimate per channel, 2π·I·(1 − (cos_inner + cos_outer)/2) (pbrt-v4's
+    /// approximation).
+    pub fn flux(&self) -> Rgb {
+        2.0 * PI * (1.0 - 0.5 * (self.cos_inner + self.cos_outer)) * self.intensity
     }
 }
 

@@ -1,4 +1,8 @@
 //! Power-proportional light selection: one CDF over emitted power, the same at every point.
+//! A light's power here is its flux's brightest channel, the scalar the tree's bounds weigh
+//! lights by: with luminance, the blue of three pure-colour panels (panels.glb) got 7 % of
+//! the choices and relMSE per sample was 0.00264 against uniform's 0.00218; by the brightest
+//! channel 0.00212 (64 spp, 48 seeds, 160×120, against a 4096-spp render).
 //!
 //! Lights whose power estimate is 0 would never be chosen, which biases the image whenever
 //! the estimate is wrong (pbrt drops them). Every light here gets at least a floor of 1e-6
@@ -22,7 +26,7 @@ pub struct PowerSampler {
 impl PowerSampler {
     /// A sampler over `lights` (non-empty); `scene_radius` sizes directional lights.
     pub fn new(lights: &[Light], scene_radius: f32) -> Self {
-        let powers: Vec<f32> = lights.iter().map(|l| l.power(scene_radius).max(0.0)).collect();
+        let powers: Vec<f32> = lights.iter().map(|l| l.flux(scene_radius).max_element().max(0.0)).collect();
         let mean = powers.iter().map(|&p| p as f64).sum::<f64>() / powers.len().max(1) as f64;
         let floor = if mean > 0.0 { (mean * 1e-6) as f32 } else { 1.0 };
         let weights: Vec<f32> = powers.into_iter().map(|p| p.max(floor)).collect();

@@ -17,7 +17,7 @@ pub use glam::{Mat3, Mat4, UVec2, Vec2, Vec3, Vec3A, Vec4};
 /// and an alias keeps them free to mix with glam's operators.
 pub type Rgb = Vec3A;
 
-/// Rec.709 luminance weights: the scalar by which lights are compared (power, importance).
+/// Rec.709 luminance weights: the watts of lights' powers, and what `learned` observes.
 pub const LUMINANCE: Vec3A = Vec3A::new(0.2126, 0.7152, 0.0722);
 
 /// Luminance of a linear Rec.709 colour.

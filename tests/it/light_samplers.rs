@@ -158,13 +158,14 @@ fn the_tree_at_a_hundred_thousand_lights_picks_as_its_pmf_says() {
 }
 
 #[test]
-fn power_sampler_is_proportional_to_power() {
+fn power_sampler_is_proportional_to_the_brightest_channel_of_the_flux() {
     let lights = mixed_lights(50);
     let s = one_light_sampler(LightSamplerKind::Power, &lights);
     let ctx = ShadingContext { p: Vec3A::ZERO, n: Vec3A::Y };
-    let total: f64 = lights.iter().map(|l| l.power(10.0) as f64).sum();
+    let weight = |l: &Light| l.flux(10.0).max_element() as f64;
+    let total: f64 = lights.iter().map(weight).sum();
     for (i, l) in lights.iter().enumerate() {
-        let expect = l.power(10.0) as f64 / total;
+        let expect = weight(l) / total;
         let got = s.pmf(&ctx, LightId(i as u32)) as f64;
         assert!((got - expect).abs() <= 1e-5 * expect.max(1e-3), "light {i}: {got} vs {expect}");
     }
