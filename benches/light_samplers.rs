@@ -44,7 +44,8 @@ fn selection(c: &mut Criterion) {
             if kind == LightSamplerKind::Local && n > 10_000 {
                 group.sample_size(10);
             }
-            let LightStrategy::One(s) = LightStrategy::build(kind, &lights, Vec3A::ZERO, 20.0) else { unreachable!() };
+            let strategy = LightStrategy::build(kind, &lights, Vec3A::ZERO, 20.0);
+            let s = strategy.sampler().expect("a one-light sampler");
             let mut k = 0u64;
             group.bench_with_input(BenchmarkId::new(kind.name(), n), &n, |b, _| {
                 b.iter(|| {

@@ -297,10 +297,15 @@ impl fmt::Display for RenderReport {
             st.rays.shadow_rays
         )?;
         if self.sampler == LightSamplerKind::Cells && self.cells.is_none() {
+            let lights = self.loaded.scene.lights.len();
+            let chose = if lights <= crate::light_sampler::EVERY_LIGHT_UP_TO {
+                "every light was sampled at diffuse points, the tree chose one elsewhere"
+            } else {
+                "the tree chose everywhere"
+            };
             writeln!(
                 f,
-                "cells      not used with {} lights (its tables are for {} to {} lights, within a quarter of the memory limit): the tree chose everywhere",
-                self.loaded.scene.lights.len(),
+                "cells      not used with {lights} lights (its tables are for {} to {} lights, within a quarter of the memory limit): {chose}",
                 crate::light_sampler::CELLS_MIN_LIGHTS,
                 crate::light_sampler::CELLS_MAX_LIGHTS
             )?;

@@ -3,7 +3,8 @@
 //! With a one-light sampler, one light is drawn with the single 64-bit number `Dim::LightSelect`
 //! and one point on it with `Dim::LightPoint`; the contribution is divided by the product
 //! pmf × pdf and MIS-weighted (power heuristic) against the BSDF's density for the same
-//! direction. With `all`, every light gets its own point (`Dim::LightPoint`, sub-index = light)
+//! direction. Where the strategy takes every light (`all`, and the default over a few lights
+//! at diffuse points), every light gets its own point (`Dim::LightPoint`, sub-index = light)
 //! and selection pmf 1. Delta lights get weight 1: BSDF sampling cannot find them.
 
 use super::{RayCounters, Tally};
@@ -15,12 +16,13 @@ use crate::math::{Rgb, Vec3A, luminance, power_heuristic};
 use crate::sampling::{Dim, SampleStream};
 use crate::scene::Scene;
 
-/// Probability that NEE at `ctx` picks `light` (1 for `all`).
+/// Probability that NEE at `ctx` picks `light`: 1 at a point where it took every light
+/// (`every`, [`LightStrategy::takes_every_light`]).
 #[inline]
-pub fn selection_pmf(strategy: &LightStrategy, ctx: &ShadingContext, light: LightId) -> f32 {
-    match strategy {
-        LightStrategy::All => 1.0,
-        LightStrategy::One(s) => s.pmf(ctx, light),
+pub fn selection_pmf(strategy: &LightStrategy, ctx: &ShadingContext, light: LightId, every: bool) -> f32 {
+    match strategy.sampler() {
+        Some(s) if !every => s.pmf(ctx, light),
+        _ => 1.0,
     }
 }
 
@@ -81,8 +83,9 @@ pub fn estimate_direct(
     bounce: u32,
     tally: &mut Tally,
 ) -> Rgb {
-    match strategy {
-        LightStrategy::All => scene
+    let every = strategy.takes_every_light(sp.is_diffuse());
+    match strategy.sampler().filter(|_| !every) {
+        None => scene
             .lights
             .iter()
             .enumerate()
@@ -91,7 +94,7 @@ pub fn estimate_direct(
                 light_contribution(scene, light, 1.0, sp, p, medium, u, &mut tally.rays, |_, _| {})
             })
             .fold(Rgb::ZERO, |a, b| a + b),
-        LightStrategy::One(sampler) => {
+        Some(sampler) => {
             let u_select = stream.get_1d_u64(bounce, Dim::LightSelect, 0);
             let u_point = stream.get_2d_u64(bounce, Dim::LightPoint, 0);
             let ctx = ShadingContext { p, n: sp.selection_normal() };

@@ -60,10 +60,21 @@ pub fn transmittance(sigma: Rgb, distance: f32) -> Rgb {
     Rgb::new(d.x.exp(), d.y.exp(), d.z.exp())
 }
 
+/// The vertex a BSDF-sampled ray left from, for the MIS weight where the ray meets a light.
+#[derive(Clone, Copy, Debug)]
+struct Previous {
+    /// Its light-sampling context.
+    ctx: ShadingContext,
+    /// The density with which its BSDF chose the ray.
+    bsdf_pdf: f32,
+    /// Whether next-event estimation there took every light.
+    every_light: bool,
+}
+
 /// Radiance from the environment along `dir` for a ray that left the scene, MIS-weighted
 /// against next-event estimation when the ray was found by BSDF sampling at `prev`.
 #[inline]
-fn escaped(scene: &Scene, strategy: &LightStrategy, dir: Vec3A, prev: Option<(ShadingContext, f32)>) -> Rgb {
+fn escaped(scene: &Scene, strategy: &LightStrategy, dir: Vec3A, prev: Option<Previous>) -> Rgb {
     let Some(id) = scene.environment else { return Rgb::ZERO };
     let Light::Environment(env) = &scene.lights[id as usize] else { unreachable!("the environment index") };
     env.radiance_from(dir) * bsdf_hit_weight(strategy, id, prev, |_| env.pdf(dir))
@@ -76,13 +87,14 @@ fn escaped(scene: &Scene, strategy: &LightStrategy, dir: Vec3A, prev: Option<(Sh
 fn bsdf_hit_weight(
     strategy: &LightStrategy,
     id: u32,
-    prev: Option<(ShadingContext, f32)>,
+    prev: Option<Previous>,
     light_pdf: impl FnOnce(&ShadingContext) -> f32,
 ) -> f32 {
     match prev {
         None => 1.0,
-        Some((ctx, bsdf_pdf)) => {
-            power_heuristic(bsdf_pdf, selection_pmf(strategy, &ctx, LightId(id)) * light_pdf(&ctx))
+        Some(v) => {
+            let pmf = selection_pmf(strategy, &v.ctx, LightId(id), v.every_light);
+            power_heuristic(v.bsdf_pdf, pmf * light_pdf(&v.ctx))
         }
     }
 }
@@ -97,7 +109,7 @@ fn emitted(
     id: u32,
     hit: &SurfaceHit,
     dir: Vec3A,
-    prev: Option<(ShadingContext, f32)>,
+    prev: Option<Previous>,
     beta: Rgb,
 ) -> Rgb {
     let light = &scene.lights[id as usize];
@@ -137,9 +149,8 @@ pub fn radiance(
     let mut l = Rgb::ZERO;
     let mut first_hit = None;
     let mut beta = Rgb::ONE;
-    // The previous vertex, for MIS at emitter hits: its light-sampling context and the
-    // density with which its BSDF chose `ray`.
-    let mut prev: Option<(ShadingContext, f32)> = None;
+    // The previous vertex, for MIS at emitter hits.
+    let mut prev: Option<Previous> = None;
     // The absorption of the glass the ray travels through (zero outside any).
     let mut medium = Rgb::ZERO;
     let mut depth = 0u32;
@@ -186,7 +197,11 @@ pub fn radiance(
             let entering = ray.dir.dot(hit.n_geom) < 0.0;
             medium = if entering { material.absorption } else { Rgb::ZERO };
         }
-        prev = Some((ShadingContext { p: hit.p, n: sp.selection_normal() }, bs.pdf));
+        prev = Some(Previous {
+            ctx: ShadingContext { p: hit.p, n: sp.selection_normal() },
+            bsdf_pdf: bs.pdf,
+            every_light: strategy.takes_every_light(sp.is_diffuse()),
+        });
         ray = Ray::new(sp.ray_origin(hit.p, bs.wi), bs.wi);
         depth += 1;
         if !survives_roulette(stream, depth, &mut beta) {

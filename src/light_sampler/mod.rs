@@ -170,13 +170,29 @@ impl AnyLightSampler {
     }
 }
 
-/// How next-event estimation picks lights: all of them, or one through a sampler.
+/// Most lights over which the default (`cells`) takes every light at diffuse shading points
+/// ([`LightStrategy::EveryAtDiffuse`]): as many as one tree node holds. With so few lights
+/// the noise of choosing one (a pixel's samples each seeing one coloured panel, or one of a
+/// point, a spot and a sun that another object shadows) outweighs a few more shadow rays
+/// where a light sample costs little else (320×240, 64 spp, 3 seeds, against Cycles):
+/// panels.glb relMSE 0.00134 → 0.00038 for 1.30× the instructions a sample (2.7× the
+/// efficiency), punctual.glb 0.000126 → 0.000081 for 1.08× (1.4×). At glossy points of the
+/// Principled BSDF, each evaluation costs 3× Lambert's and caustic fireflies decide the
+/// error: every light there too made materials.glb's relMSE 6 % lower for 18 % more
+/// instructions, so they keep the tree's one light.
+pub const EVERY_LIGHT_UP_TO: usize = 4;
+
+/// How next-event estimation picks lights: all of them, or one through a sampler, or all of
+/// them where the surface is diffuse and one elsewhere.
 #[derive(Clone, Debug)]
 pub enum LightStrategy {
     /// Every light, one shadow ray each; selection pmf 1.
     All,
     /// One light per shading point.
     One(AnyLightSampler),
+    /// Every light (pmf 1) at shading points whose BSDF is Lambert's, one through the sampler
+    /// at the others: the default over at most [`EVERY_LIGHT_UP_TO`] lights.
+    EveryAtDiffuse(AnyLightSampler),
 }
 
 impl LightStrategy {
@@ -198,6 +214,9 @@ impl LightStrategy {
             LightSamplerKind::Learned => {
                 LightStrategy::One(AnyLightSampler::Learned(LearnedSampler::new(lights, scene_centre, scene_radius)))
             }
+            LightSamplerKind::Cells if lights.len() <= EVERY_LIGHT_UP_TO => {
+                LightStrategy::EveryAtDiffuse(AnyLightSampler::Tree(LightTree::new(lights)))
+            }
             LightSamplerKind::Cells => match cells::halvings(lights.len()) {
                 Some(halvings) => LightStrategy::One(AnyLightSampler::Cells(Box::new(CellSampler::new(
                     lights,
@@ -210,28 +229,48 @@ impl LightStrategy {
         }
     }
 
+    /// Whether next-event estimation at a shading point takes every light (one shadow ray
+    /// each, selection pmf 1) rather than one; `diffuse`: the point's BSDF is Lambert's.
+    #[inline]
+    pub fn takes_every_light(&self, diffuse: bool) -> bool {
+        match self {
+            LightStrategy::All => true,
+            LightStrategy::One(_) => false,
+            LightStrategy::EveryAtDiffuse(_) => diffuse,
+        }
+    }
+
+    /// The sampler that chooses one light where not every light is taken.
+    #[inline]
+    pub fn sampler(&self) -> Option<&AnyLightSampler> {
+        match self {
+            LightStrategy::All => None,
+            LightStrategy::One(s) | LightStrategy::EveryAtDiffuse(s) => Some(s),
+        }
+    }
+
     /// The light tree's statistics, when this is the `tree` sampler or one built on it.
     pub fn tree_stats(&self) -> Option<TreeStats> {
-        match self {
-            LightStrategy::One(AnyLightSampler::Tree(t)) => Some(t.stats()),
-            LightStrategy::One(AnyLightSampler::Learned(l)) => Some(l.tree().stats()),
-            LightStrategy::One(AnyLightSampler::Cells(c)) => Some(c.tree().stats()),
+        match self.sampler()? {
+            AnyLightSampler::Tree(t) => Some(t.stats()),
+            AnyLightSampler::Learned(l) => Some(l.tree().stats()),
+            AnyLightSampler::Cells(c) => Some(c.tree().stats()),
             _ => None,
         }
     }
 
     /// What the `cells` sampler has built, when this is it.
     pub fn cell_stats(&self) -> Option<CellStats> {
-        match self {
-            LightStrategy::One(AnyLightSampler::Cells(c)) => Some(c.stats()),
+        match self.sampler()? {
+            AnyLightSampler::Cells(c) => Some(c.stats()),
             _ => None,
         }
     }
 
     /// The sampler that learns from the passes, if this is one.
     pub fn learner(&self) -> Option<&LearnedSampler> {
-        match self {
-            LightStrategy::One(AnyLightSampler::Learned(l)) => Some(l),
+        match self.sampler()? {
+            AnyLightSampler::Learned(l) => Some(l),
             _ => None,
         }
     }
@@ -252,16 +291,33 @@ impl LightStrategy {
 
     /// Bytes of sampling tables held.
     pub fn memory_bytes(&self) -> usize {
-        match self {
-            LightStrategy::All => 0,
-            LightStrategy::One(s) => s.memory_bytes(),
-        }
+        self.sampler().map_or(0, AnyLightSampler::memory_bytes)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::light::PointLight;
+    use crate::math::Rgb;
+
+    #[test]
+    fn the_default_takes_every_light_at_diffuse_points_up_to_one_nodes_worth() {
+        let lights = |n: usize| -> Vec<Light> {
+            let point = |i| PointLight { position: Vec3A::new(i as f32, 2.0, 0.0), intensity: Rgb::ONE };
+            (0..n).map(|i| Light::Point(point(i))).collect()
+        };
+        let build = |kind, n| LightStrategy::build(kind, &lights(n), Vec3A::ZERO, 10.0);
+        let few = build(LightSamplerKind::Cells, EVERY_LIGHT_UP_TO);
+        assert!(few.takes_every_light(true) && !few.takes_every_light(false));
+        assert!(matches!(few.sampler(), Some(AnyLightSampler::Tree(_))), "the tree at glossy points");
+        let more = build(LightSamplerKind::Cells, EVERY_LIGHT_UP_TO + 1);
+        assert!(!more.takes_every_light(true) && more.sampler().is_some());
+        // The samplers asked for by name choose one light everywhere; `all` takes every one.
+        assert!(!build(LightSamplerKind::Tree, 2).takes_every_light(true));
+        let all = build(LightSamplerKind::All, 2);
+        assert!(all.takes_every_light(false) && all.sampler().is_none());
+    }
 
     #[test]
     fn a_normal_falls_in_the_bin_of_its_dominant_axis_and_sign() {

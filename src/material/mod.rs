@@ -111,10 +111,16 @@ impl BsdfAt {
         }
     }
 
-    /// Whether [`sample`](Self::sample) reads its `u_lobe` (a BSDF of one lobe does not).
+    /// Whether it is Lambert's BSDF: one lobe, and the cheapest to evaluate.
+    #[inline]
+    pub fn is_diffuse(&self) -> bool {
+        matches!(self, BsdfAt::Diffuse(..))
+    }
+
+    /// Whether [`sample`](Self::sample) reads its `u_lobe` (Lambert's one lobe does not).
     #[inline]
     pub fn chooses_lobes(&self) -> bool {
-        !matches!(self, BsdfAt::Diffuse(..))
+        !self.is_diffuse()
     }
 
     /// Samples an incident direction; `u_lobe` picks a lobe, `u` the direction in it.
@@ -372,6 +378,12 @@ impl ShadingPoint {
     #[inline]
     pub fn chooses_lobes(&self) -> bool {
         self.bsdf.chooses_lobes()
+    }
+
+    /// Whether its BSDF is Lambert's (see [`BsdfAt::is_diffuse`]).
+    #[inline]
+    pub fn is_diffuse(&self) -> bool {
+        self.bsdf.is_diffuse()
     }
 
     /// Samples a world direction.

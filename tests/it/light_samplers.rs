@@ -71,9 +71,9 @@ pub fn contexts(n: usize) -> Vec<ShadingContext> {
 }
 
 fn one_light_sampler(kind: LightSamplerKind, lights: &[Light]) -> myriad::light_sampler::AnyLightSampler {
-    match LightStrategy::build(kind, lights, Vec3A::ZERO, 10.0) {
-        LightStrategy::One(s) => s,
-        LightStrategy::All => panic!("{kind} is a one-light sampler"),
+    match LightStrategy::build(kind, lights, Vec3A::ZERO, 10.0).sampler() {
+        Some(s) => s.clone(),
+        None => panic!("{kind} is a one-light sampler"),
     }
 }
 

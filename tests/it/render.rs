@@ -215,6 +215,38 @@ fn samplers_agree_on_cornell_9x9() {
     }
 }
 
+/// The default over a few lights takes every light at diffuse points and the tree's one at
+/// glossy ones, and weighs a BSDF ray that meets a lamp by whichever the vertex it left from
+/// did. With both kinds of vertex on the paths (a diffuse floor, a glossy metal wall, two
+/// coloured lamps close above them) it agrees with `all` and with the tree.
+#[test]
+fn every_light_at_diffuse_points_agrees_with_all_and_the_tree() {
+    let metal = Material { metallic: 1.0, roughness: 0.4, ..Material::diffuse("metal", Rgb::new(0.9, 0.7, 0.5)) };
+    let floor =
+        quad_mesh("floor", Vec3A::new(-2.0, 0.0, 2.0), Vec3A::new(4.0, 0.0, 0.0), Vec3A::new(0.0, 0.0, -4.0), 0);
+    let wall = quad_mesh("wall", Vec3A::new(-2.0, 0.0, -1.0), Vec3A::new(4.0, 0.0, 0.0), Vec3A::new(0.0, 2.0, 0.0), 1);
+    // Large lamps low over the floor, facing it (edge1 × edge2 points down): BSDF rays from
+    // the floor meet them often, so a wrong MIS weight there shows.
+    let lamps = vec![
+        quad_light(Vec3A::new(-1.2, 0.4, -0.8), Vec3A::X, Vec3A::Z, Rgb::new(3.0, 0.5, 0.2), false),
+        quad_light(Vec3A::new(0.2, 0.35, -0.6), Vec3A::X * 0.8, Vec3A::Z * 0.8, Rgb::new(0.2, 0.5, 2.5), true),
+    ];
+    let scene = scene_from(
+        vec![Material::diffuse("floor", Rgb::splat(0.7)), metal],
+        vec![(floor, Mat4::IDENTITY), (wall, Mat4::IDENTITY)],
+        lamps,
+        Vec3A::new(0.0, 1.4, 2.4),
+        Vec3A::new(0.0, 0.2, -0.4),
+        UVec2::new(24, 18),
+    );
+    let strategy = LightStrategy::build(LightSamplerKind::Cells, &scene.lights, scene.center, scene.radius);
+    assert!(matches!(strategy, LightStrategy::EveryAtDiffuse(_)), "{strategy:?}");
+    let reference = render_with(&scene, LightSamplerKind::All, 1024, 3, 1);
+    for (kind, seed) in [(LightSamplerKind::Cells, 2), (LightSamplerKind::Tree, 3)] {
+        compare_films(&render_with(&scene, kind, 1024, 3, seed), &reference, sidak(2), kind.name());
+    }
+}
+
 /// Two independent renders of the same thing agree: image-mean z-test and few outliers.
 pub fn compare_films(a: &Film, b: &Film, alpha: f64, label: &str) {
     let residuals: Vec<(f64, f64)> = (0..(a.size().x * a.size().y) as usize)
