@@ -18,7 +18,10 @@ use super::settings::{COMPARE_DEFAULT_SPP, RenderRequest, Resolved};
 use super::{LoadedScene, SceneOptions, load_scene};
 use crate::compare::html::{self, Page, PageImage};
 use crate::compare::images::{SheetColumn, contact_sheet, error_picture, preview_picture};
-use crate::compare::metrics::{BIAS_ALPHA, REL_MSE_EPSILON, bias_check, efficiency, error_metrics, relative_error_map};
+use crate::compare::metrics::{
+    BIAS_ALPHA, REL_MSE_EPSILON, TRIMMED_SHARE, bias_check, efficiency, error_metrics, relative_error_map,
+    trimmed_rel_mse,
+};
 use crate::compare::plot::{Curve, convergence_svg};
 use crate::compare::report::{CompareReport, ReferenceInfo, RunResult, SamplerResult, Stat, num};
 use crate::error::{Error, Result};
@@ -595,7 +598,9 @@ impl SamplerRuns {
                 run
             }
         };
-        let m = error_metrics(&run.film.means(), &reference.pixels)?;
+        let means = run.film.means();
+        let m = error_metrics(&means, &reference.pixels)?;
+        let rel_mse_trimmed = trimmed_rel_mse(&means, &reference.pixels, TRIMMED_SHARE)?;
         self.seeds.add(&run.film);
         let result = RunResult {
             seed,
@@ -603,6 +608,7 @@ impl SamplerRuns {
             spp: run.film.spp(),
             mse: m.mse,
             rel_mse: m.rel_mse,
+            rel_mse_trimmed,
             efficiency: efficiency(m.rel_mse, run.seconds),
             // A run rendered elsewhere shows only where it ended.
             convergence: if run.convergence.is_empty() { vec![(run.seconds, m.rel_mse)] } else { run.convergence },
@@ -620,6 +626,8 @@ impl SamplerRuns {
         let (mean, mean_variance) = self.seeds.finish();
         let stat = |f: &dyn Fn(&RunResult) -> f64| Stat::of(&self.runs.iter().map(f).collect::<Vec<_>>());
         let (seconds, rel_mse) = (stat(&|r| r.seconds), stat(&|r| r.rel_mse));
+        let rel_mse_trimmed = stat(&|r| r.rel_mse_trimmed);
+        let efficiency_trimmed = efficiency(rel_mse_trimmed.mean, seconds.mean);
         // The efficiency of the mean error, not the mean of the runs' efficiencies: the mean of
         // 1/relMSE rewards a sampler whose error is mostly low and now and then huge (`power`'s
         // fireflies on glass.glb, 64 spp: 14 of 16 seeds at relMSE·spp 12–15, two at 71 and
@@ -635,6 +643,8 @@ impl SamplerRuns {
             rel_mse,
             efficiency,
             efficiency_vs_best: 0.0,
+            efficiency_trimmed,
+            rel_mse_trimmed,
             bias: bias_check(&mean, &mean_variance, &reference.pixels, &reference.variance, plan.bias_alpha()),
             files: first.files,
             runs: self.runs,
