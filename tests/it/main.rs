@@ -8,6 +8,7 @@ mod compare;
 mod display;
 mod environment;
 mod formats;
+mod light_points;
 mod light_samplers;
 mod mutation;
 mod render;
