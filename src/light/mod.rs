@@ -96,7 +96,7 @@ impl Light {
         match self {
             Light::Point(_) | Light::Spot(_) | Light::Distant(_) | Light::Environment(_) => 0.0,
             Light::Triangle(l) => l.emission.pdf_li(p, q, n_q, l.area),
-            Light::Quad(l) => l.pdf_li(p, q, n_q),
+            Light::Quad(l) => l.emission.pdf_li(p, q, n_q, l.area),
         }
     }
 

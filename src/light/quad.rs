@@ -1,6 +1,4 @@
-//! Emissive parallelogram `p0 + s·e1 + t·e2`, sampled uniformly in the solid angle it
-//! subtends where it is a rectangle seen large enough ([`SphericalRectangle`]), otherwise
-//! uniformly by area.
+//! Emissive parallelogram `p0 + s·e1 + t·e2`, sampled uniformly by area.
 //!
 //! Light grids are made of these, and so is every emissive mesh whose consecutive triangles
 //! pair up into parallelograms (a Blender plane or grid lamp, exported as two triangles per
@@ -8,19 +6,7 @@
 //! see, saves a level of the light tree, and keeps a lamp's pmf in one place.
 
 use super::{AreaEmission, LightSample};
-use crate::math::spherical_rectangle::SphericalRectangle;
 use crate::math::{Vec2, Vec3A};
-
-/// Smallest solid angle (sr, judged from the centre) sampled as one: below, the lamp is
-/// small or far enough that area sampling's density hardly varies over it, and costs less.
-/// Per sample against area sampling (160×120, 64 spp, 8 seeds; instructions by cachegrind):
-/// panels.glb relMSE·spp 0.01986 → 0.01591 at 3·10⁻⁴ sr (pbrt-v4's bound) for 3948 → 4837
-/// instructions, → 0.01622 at 0.05 for 4492, product 0.93× (0.96× at 0.03, 0.94× at 0.1);
-/// cornell_grid_7.glb, whose lamps never cover 0.05 sr, the same error for 1.2 % more
-/// instructions (the test below).
-pub const MIN_SPHERICAL: f32 = 0.05;
-/// Largest: near 2π (a receiver almost in contact) the parametrisation loses precision.
-pub const MAX_SPHERICAL: f32 = 6.22;
 
 /// One emissive parallelogram (world space).
 #[derive(Clone, Debug)]
@@ -37,9 +23,6 @@ pub struct QuadLight {
     pub area: f32,
     /// Emission.
     pub emission: AreaEmission,
-    /// Its edges are perpendicular (to 10⁻⁴ of their lengths' product), so that it can be
-    /// sampled by solid angle.
-    pub rectangle: bool,
 }
 
 impl QuadLight {
@@ -48,8 +31,7 @@ impl QuadLight {
         let c = e1.cross(e2);
         let area = c.length();
         let n = c.try_normalize()?;
-        let rectangle = e1.dot(e2).abs() <= 1e-4 * e1.length() * e2.length();
-        (area > 0.0 && area.is_finite()).then_some(Self { p0, e1, e2, n, area, emission, rectangle })
+        (area > 0.0 && area.is_finite()).then_some(Self { p0, e1, e2, n, area, emission })
     }
 
     /// The parallelogram triangles `t0` and `t1` (corners counter-clockwise seen from their
@@ -83,53 +65,11 @@ impl QuadLight {
         [[a, b, c], [a, c, d]]
     }
 
-    /// A sample seen from `p`: uniform in solid angle where [`spherical`](Self::spherical)
-    /// says so, else uniform by area.
+    /// Uniform-area sample seen from `p`.
     #[inline]
     pub fn sample_li(&self, p: Vec3A, u: Vec2) -> Option<LightSample> {
-        match self.spherical(p) {
-            Some(r) => self.sample_spherical(p, &r, u),
-            None => self.emission.sample_at(p, self.p0 + self.e1 * u.x + self.e2 * u.y, self.n, self.area),
-        }
-    }
-
-    /// Solid-angle density at `p` of [`sample_li`](Self::sample_li) picking `q` (a point of
-    /// the quad, normal `n_q`).
-    #[inline]
-    pub fn pdf_li(&self, p: Vec3A, q: Vec3A, n_q: Vec3A) -> f32 {
-        match self.spherical(p) {
-            Some(r) => r.solid_angle().recip(),
-            None => self.emission.pdf_li(p, q, n_q, self.area),
-        }
-    }
-
-    /// The quad as a spherical rectangle seen from `p`, where it is sampled as one: a
-    /// rectangle whose emitting side faces `p` and which, judged from its centre, covers at
-    /// least [`MIN_SPHERICAL`] sr (A·cos θ/d² ≥ it), and exactly at most [`MAX_SPHERICAL`].
-    /// The first test is inline, for it is all most samples pay; the rest out of line.
-    #[inline]
-    fn spherical(&self, p: Vec3A) -> Option<SphericalRectangle> {
-        let height = self.n.dot(p - self.p0);
-        let faces = self.emission.two_sided || height > 0.0;
-        let d2 = (self.p0 + 0.5 * (self.e1 + self.e2) - p).length_squared();
-        let seen = self.area * height;
-        (self.rectangle && faces && seen * seen >= MIN_SPHERICAL * MIN_SPHERICAL * d2 * d2 * d2)
-            .then(|| self.seen_from(p))
-            .flatten()
-    }
-
-    /// [`spherical`](Self::spherical) past its first test.
-    #[inline(never)]
-    fn seen_from(&self, p: Vec3A) -> Option<SphericalRectangle> {
-        let r = SphericalRectangle::new(p, self.p0, self.e1, self.e2)?;
-        (r.solid_angle() > 0.0 && r.solid_angle() <= MAX_SPHERICAL).then_some(r)
-    }
-
-    /// A sample of `r`, the quad seen from `p` (out of line, as [`seen_from`](Self::seen_from)).
-    #[inline(never)]
-    fn sample_spherical(&self, p: Vec3A, r: &SphericalRectangle, u: Vec2) -> Option<LightSample> {
-        let sample = self.emission.sample_at(p, r.sample(u), self.n, self.area)?;
-        Some(LightSample { pdf: r.solid_angle().recip(), ..sample })
+        let q = self.p0 + self.e1 * u.x + self.e2 * u.y;
+        self.emission.sample_at(p, q, self.n, self.area)
     }
 }
 

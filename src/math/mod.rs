@@ -6,7 +6,6 @@
 pub mod distribution;
 mod fixed;
 pub mod frame;
-pub mod spherical_rectangle;
 pub mod warp;
 
 pub use fixed::Fixed;

@@ -43,25 +43,22 @@ fn quad_samples_follow_the_density_they_report_near_and_far() {
     let rectangle = QuadLight::new(corner, e1, e2, e(false)).unwrap();
     let two_sided = QuadLight::new(corner, e1, e2, e(true)).unwrap();
     let skewed = QuadLight::new(corner, e1 + Vec3A::new(0.0, 0.0, 0.3), e2, e(false)).unwrap();
-    // (light, receiver, sampled by solid angle there)
+    // Near (the density swings 20× over the quad), grazing, far, behind a two-sided one,
+    // and a parallelogram that is no rectangle.
     let cases = [
-        (&rectangle, Vec3A::new(0.1, 1.7, 0.0), true),
-        (&rectangle, Vec3A::new(2.5, 1.5, 0.0), false),
-        (&rectangle, Vec3A::new(0.7, 1.85, 0.3), true),
-        (&rectangle, Vec3A::new(0.0, -4.0, 0.0), false),
-        (&two_sided, Vec3A::new(-0.2, 2.4, 0.1), true),
-        (&skewed, Vec3A::new(0.1, 1.7, 0.0), false),
+        (&rectangle, Vec3A::new(0.1, 1.7, 0.0)),
+        (&rectangle, Vec3A::new(0.7, 1.85, 0.3)),
+        (&rectangle, Vec3A::new(0.0, -4.0, 0.0)),
+        (&two_sided, Vec3A::new(-0.2, 2.4, 0.1)),
+        (&skewed, Vec3A::new(0.1, 1.7, 0.0)),
     ];
     let alpha = sidak(cases.len());
     let draws = 200_000u64;
-    for (i, &(q, p, spherical)) in cases.iter().enumerate() {
+    for (i, &(q, p)) in cases.iter().enumerate() {
         let light = Light::Quad(q.clone());
         let expected = expected_shares(&light, q, p);
         let total: f64 = expected.iter().sum();
         assert!((total - 1.0).abs() < 2e-3, "case {i}: the density integrates to {total}");
-        // One density over the whole quad where it is sampled by solid angle, not elsewhere.
-        let (a, b) = (light.pdf_li(p, q.p0, q.n), light.pdf_li(p, q.p0 + 0.5 * (q.e1 + q.e2), q.n));
-        assert_eq!(a == b, spherical, "case {i}: density {a} at a corner, {b} at the centre");
         let mut observed = vec![0.0; BINS * BINS];
         for k in 0..draws {
             let sample = light.sample_li(p, [draw(k, 2 * i as u64), draw(k, 2 * i as u64 + 1)], &[]).unwrap();
