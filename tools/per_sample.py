@@ -8,8 +8,8 @@ machine whose timings wander by ±10 % from run to run.
 For each sampler: relMSE · spp at `--spp` samples over `--seeds` seeds (`myriad compare`
 against REFERENCE, which must be a converged render at the same resolution), the spread of
 the seeds' values (a heavy tail there is fireflies), the same without each image's worst
-0.1 % of pixels (compare's `99.9 %`, which a firefly shared by every sampler does not decide), and the instructions one sample costs,
-counted by `valgrind --tool=cachegrind` on one thread as the difference between a 12-spp
+0.1 % of pixels (compare's `99.9 %`, which a firefly shared by every sampler does not
+decide), and the instructions one sample costs, counted by `valgrind --tool=cachegrind` on one thread as the difference between a 12-spp
 and a 4-spp render (so loading, building and writing cancel out). Their product is the
 instructions a sample spends for a given error; a lower one is a more efficient sampler as
 far as instruction counts go (cache misses are not counted: check with an equal-time run,

@@ -14,8 +14,9 @@
 //! starve it there: the cell is split into its eight halves, each built the same way when a
 //! point first lands in it, down to [`SPLITS`] halvings (fewer where memory is short:
 //! [`halvings`]), where the test relaxes to [`LAST_TRUST`]; a cell that fails even that
-//! leaves the choice to the light tree at the point itself. Elsewhere a choice is a count over the cell's [`Table16`] (lights in
-//! `local`'s Morton order, 2¹⁶ values shared among them: with the uniform share each of at
+//! leaves the choice to the light tree at the point itself. Elsewhere a choice is a count
+//! over the cell's [`Table16`] (lights in `local`'s Morton order, 2¹⁶ values shared among
+//! them: with the uniform share each of at
 //! most [`MAX_LIGHTS`] lights owns at least 25), with no importance evaluated, where the
 //! tree evaluates four on every level it descends.
 //!
@@ -302,17 +303,14 @@ impl CellSampler {
     }
 
     /// The cube at `corner` of edge `edge`, `level` halvings below the grid, for receivers
-    /// of normal bin `bin`: its [`table`](Self::table), or where none will do, its eight
-    /// halves (the tree below its most halvings).
+    /// of normal bin `bin`: its [`table`](Self::table) under [`TRUST`], or where none will
+    /// do, its eight halves; at its most halvings, its table under [`LAST_TRUST`] or the tree.
     fn build(&self, corner: Vec3A, edge: f32, bin: usize, level: u32) -> Cell {
-        let trust = if level < self.halvings { TRUST } else { LAST_TRUST };
+        let last = level == self.halvings;
+        let trust = if last { LAST_TRUST } else { TRUST };
         let cell = self.table(corner, edge, bin_normal(bin), trust).map_or_else(
             || {
-                if level < self.halvings {
-                    Cell::Split(Box::new(std::array::from_fn(|_| OnceLock::new())))
-                } else {
-                    Cell::Tree
-                }
+                if !last { Cell::Split(Box::new(std::array::from_fn(|_| OnceLock::new()))) } else { Cell::Tree }
             },
             Cell::Table,
         );

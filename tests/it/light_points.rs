@@ -43,7 +43,7 @@ fn quad_samples_follow_the_density_they_report_near_and_far() {
     let rectangle = QuadLight::new(corner, e1, e2, e(false)).unwrap();
     let two_sided = QuadLight::new(corner, e1, e2, e(true)).unwrap();
     let skewed = QuadLight::new(corner, e1 + Vec3A::new(0.0, 0.0, 0.3), e2, e(false)).unwrap();
-    // Near (the density swings 20× over the quad), grazing, far, behind a two-sided one,
+    // Near (the density swings 14× over the quad), grazing, far, behind a two-sided one,
     // and a parallelogram that is no rectangle.
     let cases = [
         (&rectangle, Vec3A::new(0.1, 1.7, 0.0)),
