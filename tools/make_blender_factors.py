@@ -2,10 +2,10 @@
 """One-factor Blender test scenes: each changes one material or light of a fixed stage.
 
 Run with a Python that has Blender's `bpy` module (the peers venv,
-`../shared/peers/setup_venv.sh`), from the repository root:
+`tools/peers/setup_venv.sh`), from the repository root:
 
     ~/.cache/myriad-peers/bin/python tools/make_blender_factors.py tests/data/blender/factors \
-        [--render ../shared/peers/cycles_render.py] [--spp 2048] [--only NAME,...]
+        [--render tools/peers/cycles_render.py] [--spp 2048] [--only NAME,...]
 
 For every factor it builds the scene with `bpy.data`/`bpy.ops` in an empty Blender file and
 writes NAME.glb with Blender's own glTF exporter (what a user's export is: cameras and

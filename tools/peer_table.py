@@ -2,7 +2,7 @@
 """myriad against Cycles and Mitsuba on the same Blender exports, in one run.
 
     python3 tools/peer_table.py [--scenes cornell_grid_7,materials] [--spp 64] [--seeds 2]
-        [--peers ../shared/peers] [--peers-python ~/.cache/myriad-peers/bin/python]
+        [--peers tools/peers] [--peers-python ~/.cache/myriad-peers/bin/python]
         [--out target/peers] [--readme README.md]
 
 For each scene `tests/data/blender/NAME.glb` it renders, at 320×240 and `--spp` samples with
@@ -21,7 +21,7 @@ Writes `OUT/NAME/...` (every image and JSON) and `OUT/table.md`, prints the tabl
 `--readme` replaces the text between `<!-- peers:begin -->` and `<!-- peers:end -->` in it.
 Peer renders already in OUT with the same settings are reused (`--fresh` renders them again).
 Only the Python standard library is used here; the peers need their venv
-(`../shared/peers/setup_venv.sh`).
+(`tools/peers/setup_venv.sh`).
 """
 
 import argparse
@@ -123,7 +123,7 @@ def main():
     ap.add_argument("--scenes", default="cornell_grid_7,materials")
     ap.add_argument("--spp", type=int, default=64)
     ap.add_argument("--seeds", type=int, default=2)
-    ap.add_argument("--peers", default=str(ROOT.parent / "shared" / "peers"))
+    ap.add_argument("--peers", default=str(ROOT / "tools" / "peers"))
     ap.add_argument("--peers-python", default=str(Path.home() / ".cache/myriad-peers/bin/python"))
     ap.add_argument("--myriad", default=str(ROOT / "target/release/myriad"))
     ap.add_argument("--out", default=str(ROOT / "target/peers"))
