@@ -3,7 +3,7 @@
 //! Owns: the start-up test that the machine has every instruction-set extension the binary
 //! was compiled for. On x86-64, `.cargo/config.toml` compiles for `x86-64-v3` (AVX2, FMA,
 //! BMI1/2, LZCNT, POPCNT, SSE4.2: Intel since 2013, AMD since 2015), which renders with 3–14 %
-//! less CPU than the 2003 baseline (README, "Building for a CPU"). A binary built so executes
+//! less CPU than the 2003 baseline (docs/rendering.md, "Building for a CPU"). A binary built so executes
 //! illegal instructions on an older CPU, so [`require_build_features`] tells the user which
 //! extensions are missing and how to rebuild, instead of letting the process die on SIGILL.
 //!
@@ -141,7 +141,7 @@ pub fn require_build_features() {
         }
         let _ = err.write_all(
             b"\nrebuild it for this machine: RUSTFLAGS='-C target-cpu=native' cargo build --release\n\
-              (or for any x86-64 CPU with RUSTFLAGS='-C target-cpu=x86-64'; README, \"Building for a CPU\")\n",
+              (or for any x86-64 CPU with RUSTFLAGS='-C target-cpu=x86-64'; docs/rendering.md)\n",
         );
         std::process::exit(2);
     }

@@ -40,6 +40,7 @@ pub mod image;
 pub mod integrator;
 pub mod interrupt;
 pub mod io;
+pub mod learning;
 pub mod light;
 pub mod light_sampler;
 pub mod limits;

@@ -16,7 +16,8 @@ use rayon::prelude::*;
 use crate::film::{AovSet, Film};
 use crate::integrator::{RayCounters, Tally, path};
 use crate::interrupt::{self, Stop};
-use crate::light_sampler::{LEARN_UNTIL, LearnedStats, LightStrategy, Observations};
+use crate::learning::{LEARN_UNTIL, Learning, Seen};
+use crate::light_sampler::{LearnedStats, LightStrategy};
 use crate::math::UVec2;
 use crate::sampling::{Dim, SampleStream};
 use crate::scene::Scene;
@@ -192,37 +193,43 @@ pub struct RenderOutput {
     pub stats: RenderStats,
 }
 
+/// One pass: samples `first..first + count` of every pixel, rendered with `strategy`.
+struct Pass<'a> {
+    scene: &'a Scene,
+    strategy: &'a LightStrategy,
+    settings: &'a RenderSettings,
+    first: u32,
+    count: u32,
+}
+
+/// Who hears of a pass under way: `progress` as bands finish; setting `cancel` calls the
+/// pass off at the next pixel (the film is then incomplete).
+#[derive(Clone, Copy, Default)]
+struct Watch<'a> {
+    progress: Option<&'a dyn RenderObserver>,
+    cancel: Option<&'a AtomicBool>,
+}
+
 /// What one pass reports besides the samples it adds to the film.
 struct PassTally {
     /// Whether the pass was called off half-way (its samples are then incomplete).
     cancelled: bool,
     rays: RayCounters,
     non_finite: u64,
-    /// What its light samples saw (when the strategy learns).
-    seen: Option<Observations>,
+    /// What its paths saw, for whatever learns.
+    seen: Seen,
 }
 
-/// Adds samples `first..first+count` of every pixel to `film`; with `learning`, keeps what
-/// the light samples saw for the strategy to learn from. Setting `cancel` calls the pass off
-/// at the next pixel (the film is then incomplete).
-#[allow(clippy::too_many_arguments)]
-fn render_pass(
-    scene: &Scene,
-    strategy: &LightStrategy,
-    settings: &RenderSettings,
-    film: &mut Film,
-    first: u32,
-    count: u32,
-    learning: bool,
-    progress: Option<&dyn RenderObserver>,
-    cancel: Option<&AtomicBool>,
-) -> PassTally {
-    let called_off = || cancel.is_some_and(|c| c.load(Ordering::Relaxed));
+/// Adds `pass`'s samples to `film`; its paths record into copies of `recording` (one per
+/// worker, merged), empty when nothing learns.
+fn render_pass(pass: &Pass, film: &mut Film, recording: &Seen, watch: Watch) -> PassTally {
+    let called_off = || watch.cancel.is_some_and(|c| c.load(Ordering::Relaxed));
+    let Pass { scene, strategy, settings, first, count } = *pass;
     let size = settings.resolution;
     let bands: Vec<_> = film.bands_mut(ROWS_PER_BAND).collect();
-    // Each worker sums its bands' counts and observations; every sum is of integers, so the
+    // Each worker sums its bands' counts and records; every sum is of integers, so the
     // totals do not depend on how rayon splits the bands.
-    let empty = || (Tally { seen: learning.then(Observations::default), ..Tally::default() }, 0u64);
+    let empty = || (Tally { seen: recording.empty_like(), ..Tally::default() }, 0u64);
     let (tally, bad) = bands
         .into_par_iter()
         .fold(empty, |(mut tally, mut bad), (row0, pixels, mut aovs)| {
@@ -250,7 +257,7 @@ fn render_pass(
                     }
                 }
             }
-            if let Some(observer) = progress {
+            if let Some(observer) = watch.progress {
                 observer.advance(pixels.len() as u64 * count as u64);
             }
             (tally, bad)
@@ -290,45 +297,21 @@ fn next_pass(budget: Budget, done: u32, per_spp: Option<Duration>, elapsed: Dura
     }
 }
 
-/// A strategy that learns, and what its light samples saw since it last learned.
-struct Learner {
-    strategy: LightStrategy,
-    pending: Observations,
-}
-
-impl Learner {
-    /// Whether a pass starting at sample `first` must record what its light samples see.
-    fn wants(&self, first: u32) -> bool {
-        first < LEARN_UNTIL
+/// Renders samples `0..end` into a film that is then dropped: the state `learning` a render
+/// of a sample range starting at `end` needs (see [`crate::learning`]).
+fn train(learning: &mut Learning, scene: &Scene, settings: &RenderSettings, end: u32) -> RayCounters {
+    let mut film = Film::new(settings.resolution, false);
+    let mut rays = RayCounters::default();
+    while film.spp() < end {
+        let first = film.spp();
+        let (limit, recording) = learning.recording(first).expect("training stays within the learning");
+        let count = limit.min(end - first);
+        let pass = Pass { scene, strategy: learning.strategy(), settings, first, count };
+        let tally = render_pass(&pass, &mut film, &recording, Watch::default());
+        rays.add(&tally.rays);
+        learning.after_pass(tally.seen, first + count);
     }
-
-    /// Takes a pass's observations; learns from everything since the last time when the pass
-    /// ended at a power of two (within [`LEARN_UNTIL`]), so the state is a function of the
-    /// samples alone, not of how passes split them.
-    fn after_pass(&mut self, seen: Option<Observations>, end: u32) {
-        if let Some(seen) = seen {
-            self.pending.merge(seen);
-        }
-        if end.is_power_of_two() && end <= LEARN_UNTIL {
-            self.strategy.learn(std::mem::take(&mut self.pending));
-        }
-    }
-
-    /// Renders samples `0..end` into a film that is then dropped: the state (learned and
-    /// pending) a render of a sample range starting at `end` needs (see
-    /// `light_sampler::learned`).
-    fn train(&mut self, scene: &Scene, settings: &RenderSettings, end: u32) -> RayCounters {
-        let mut film = Film::new(settings.resolution, false);
-        let mut rays = RayCounters::default();
-        while film.spp() < end {
-            let first = film.spp();
-            let count = ((first + 1).next_power_of_two() - first).min(end - first);
-            let pass = render_pass(scene, &self.strategy, settings, &mut film, first, count, true, None, None);
-            rays.add(&pass.rays);
-            self.after_pass(pass.seen, first + count);
-        }
-        rays
-    }
+    rays
 }
 
 /// A render that grows pass by pass: the film, the learning state and the counts. [`render`]
@@ -343,7 +326,7 @@ pub struct Progressive<'a> {
     strategy: &'a LightStrategy,
     settings: RenderSettings,
     film: Film,
-    learner: Option<Learner>,
+    learning: Option<Learning>,
     /// Index of the first sample (a sample range's start; 0 otherwise).
     offset: u32,
     rays: RayCounters,
@@ -355,14 +338,13 @@ impl<'a> Progressive<'a> {
     /// starting past 0 first trains a learning strategy on the samples before it.
     pub fn new(scene: &'a Scene, strategy: &'a LightStrategy, settings: &RenderSettings) -> Self {
         let offset = settings.budget.fixed().map_or(0, |f| f.0);
-        let mut learner =
-            strategy.fresh_learner().map(|strategy| Learner { strategy, pending: Observations::default() });
+        let mut learning = Learning::new(strategy);
         let mut rays = RayCounters::default();
-        if let Some(l) = learner.as_mut().filter(|_| offset > 0) {
-            rays.add(&l.train(scene, settings, offset.min(LEARN_UNTIL)));
+        if let Some(l) = learning.as_mut().filter(|_| offset > 0) {
+            rays.add(&train(l, scene, settings, offset.min(LEARN_UNTIL)));
         }
         let film = Film::new(settings.resolution, settings.aovs.wants_first_hit());
-        Self { scene, strategy, settings: *settings, film, learner, offset, rays, non_finite: 0 }
+        Self { scene, strategy, settings: *settings, film, learning, offset, rays, non_finite: 0 }
     }
 
     /// Adds the next `count` samples of every pixel (fewer when the strategy must learn
@@ -380,18 +362,21 @@ impl<'a> Progressive<'a> {
         cancel: Option<&AtomicBool>,
     ) -> Option<u32> {
         let first = self.offset + self.film.spp();
-        let learning = self.learner.as_ref().is_some_and(|l| l.wants(first));
-        let count = if learning { count.min((first + 1).next_power_of_two() - first) } else { count };
-        let current = self.learner.as_ref().map_or(self.strategy, |l| &l.strategy);
-        let pass =
-            render_pass(self.scene, current, &self.settings, &mut self.film, first, count, learning, progress, cancel);
-        if pass.cancelled {
+        let recording = self.learning.as_ref().and_then(|l| l.recording(first));
+        let (count, seen) = match recording {
+            Some((limit, seen)) => (count.min(limit), seen),
+            None => (count, Seen::default()),
+        };
+        let strategy = self.learning.as_ref().map_or(self.strategy, Learning::strategy);
+        let pass = Pass { scene: self.scene, strategy, settings: &self.settings, first, count };
+        let tally = render_pass(&pass, &mut self.film, &seen, Watch { progress, cancel });
+        if tally.cancelled {
             return None;
         }
-        self.rays.add(&pass.rays);
-        self.non_finite += pass.non_finite;
-        if let Some(l) = self.learner.as_mut().filter(|_| learning) {
-            l.after_pass(pass.seen, first + count);
+        self.rays.add(&tally.rays);
+        self.non_finite += tally.non_finite;
+        if let Some(l) = self.learning.as_mut() {
+            l.after_pass(tally.seen, first + count);
         }
         Some(count)
     }
@@ -411,7 +396,7 @@ impl<'a> Progressive<'a> {
             samples: size.x as u64 * size.y as u64 * spp as u64,
             rays: self.rays,
             non_finite_samples: self.non_finite,
-            learned: self.learner.as_ref().and_then(|l| l.strategy.learner()).map(|l| l.stats()),
+            learned: self.learning.as_ref().and_then(Learning::light_stats),
             stopped,
         };
         RenderOutput { film: self.film, stats }

@@ -87,7 +87,7 @@ pub struct RenderDefaults {
     pub spp: Option<u32>,
     /// Maximum scattering events (1 = direct lighting only).
     pub max_depth: Option<u32>,
-    /// Light sampler: `all`, `uniform`, `power`, `local`, `tree`, `learned`.
+    /// Light sampler: `all`, `uniform`, `power`, `local`, `tree`, `learned` or `cells`.
     pub sampler: Option<LightSamplerKind>,
     /// Random seed.
     pub seed: Option<u64>,

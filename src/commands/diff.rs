@@ -3,7 +3,7 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use super::compare::file_name;
+use super::file_name;
 use crate::compare::html::{self, Page, PageImage};
 use crate::compare::images::error_picture;
 use crate::compare::metrics::{ErrorMetrics, error_metrics, relative_error_map};

@@ -95,7 +95,7 @@ impl fmt::Display for InfoReport {
         if let Some(l) = &self.learned {
             writeln!(
                 f,
-                "learned      {} clusters under {} top nodes, cells of {:.3} m × 6 normal directions, learns until {} spp, at most {}",
+                "learned      {} clusters under {} top nodes, cells of {:.3} m × 7 normal bins, learns until {} spp, at most {}",
                 l.clusters,
                 l.top_nodes,
                 l.cell_size,

@@ -7,64 +7,13 @@
 //! settings; disjoint ranges; no gap unless allowed) and adds them.
 
 use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use super::{LoadedScene, SceneOptions, preview_path};
+use super::preview_path;
 use crate::error::{Error, Result};
 use crate::film::Film;
-use crate::fingerprint::{Fingerprint, revision};
 use crate::io::part::{self, PartHeader};
 use crate::limits::check_memory;
-use crate::render::{RenderSettings, RenderStats};
-use crate::settings::LightSamplerKind;
-
-/// Where the part of samples `a..b` goes for `-o output`: `output` itself when it ends in
-/// `.part`, else beside it as `<stem>.samples-A-B.part`.
-pub fn part_path(output: &Path, (a, b): (u32, u32)) -> PathBuf {
-    if output.extension().is_some_and(|e| e.eq_ignore_ascii_case("part")) {
-        return output.to_path_buf();
-    }
-    let stem = output.file_stem().map_or("myriad".into(), |s| s.to_string_lossy().into_owned());
-    output.with_file_name(format!("{stem}.samples-{a}-{b}.part"))
-}
-
-/// Fingerprint of the scene a render sees: the contents of every file it read (not their
-/// paths, so another machine's copy matches), how it was read, the camera and the size.
-pub fn scene_fingerprint(loaded: &LoadedScene, options: &SceneOptions) -> Result<String> {
-    let mut key = Fingerprint::new("myriad scene");
-    for (i, input) in loaded.report.inputs.iter().enumerate() {
-        key.contents(&format!("input {i}"), input)?;
-    }
-    let size = loaded.report.resolution;
-    key.value("gltf_scene", format!("{:?}", options.load.gltf_scene))
-        .value("punctual_scale", options.load.punctual_scale.to_bits())
-        .value("camera", options.build.camera.as_deref().unwrap_or("-"))
-        .value("resolution", format!("{}x{}", size.x, size.y));
-    Ok(key.finish())
-}
-
-/// The header of the part a render of samples `samples` wrote.
-pub fn part_header(
-    scene: &str,
-    scene_hash: String,
-    sampler: LightSamplerKind,
-    settings: &RenderSettings,
-    samples: (u32, u32),
-    stats: &RenderStats,
-) -> PartHeader {
-    PartHeader {
-        myriad: revision().to_string(),
-        scene: scene.to_string(),
-        scene_hash,
-        sampler: sampler.name().to_string(),
-        seed: settings.seed,
-        max_depth: settings.max_depth,
-        resolution: settings.resolution.to_array(),
-        aovs: settings.aovs.names(),
-        samples: [samples.0, samples.1],
-        render_seconds: stats.elapsed.as_secs_f64(),
-    }
-}
 
 /// What to merge.
 #[derive(Clone, Debug)]
@@ -199,7 +148,7 @@ fn difference(a: &PartHeader, b: &PartHeader) -> String {
 /// Writes the merged image (EXR with the provenance a render writes, and the preview).
 fn write_merged(opts: &MergeOptions, header: &PartHeader, film: &Film, png: Option<PathBuf>) -> Result<Vec<PathBuf>> {
     let h = header;
-    let mut meta = super::render::image_provenance(&h.scene, &h.sampler, film.spp(), h.seed, h.max_depth);
+    let mut meta = super::provenance::image_provenance(&h.scene, &h.sampler, film.spp(), h.seed, h.max_depth);
     meta.push(("myriad.samples".into(), format!("{}..{}", h.samples[0], h.samples[1])));
     meta.push(("myriad.parts_revision".into(), h.myriad.clone()));
     crate::io::exr::write(&opts.output, &film.layers(h.aov_set()), &meta)?;

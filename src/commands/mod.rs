@@ -11,6 +11,7 @@ pub mod display;
 pub mod info;
 pub mod merge;
 pub mod progress;
+pub mod provenance;
 pub mod render;
 pub mod settings;
 pub mod slurm;
@@ -100,4 +101,9 @@ pub fn human_rate(r: f64) -> String {
     } else {
         format!("{r:.1} ")
     }
+}
+
+/// The last component of `p`, for titles and captions.
+pub fn file_name(p: &Path) -> String {
+    p.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned())
 }

@@ -70,35 +70,6 @@ pub struct RenderReport {
     pub written: Vec<PathBuf>,
 }
 
-/// Header attributes recording how an image was made: this myriad's version and git
-/// revision, the scene, the sampler, spp, seed and depth.
-pub fn image_provenance(scene: &str, sampler: &str, spp: u32, seed: u64, max_depth: u32) -> Vec<(String, String)> {
-    [
-        ("myriad.version", env!("CARGO_PKG_VERSION").to_string()),
-        ("myriad.git_revision", env!("MYRIAD_GIT_REVISION").to_string()),
-        ("myriad.scene", scene.to_string()),
-        ("myriad.sampler", sampler.to_string()),
-        ("myriad.spp", spp.to_string()),
-        ("myriad.seed", seed.to_string()),
-        ("myriad.max_depth", max_depth.to_string()),
-    ]
-    .into_iter()
-    .map(|(k, v)| (k.to_string(), v))
-    .collect()
-}
-
-/// A render's [`image_provenance`] and its render time.
-pub fn provenance(
-    scene: &str,
-    sampler: LightSamplerKind,
-    settings: &RenderSettings,
-    stats: &crate::render::RenderStats,
-) -> Vec<(String, String)> {
-    let mut meta = image_provenance(scene, sampler.name(), stats.spp, settings.seed, settings.max_depth);
-    meta.push(("myriad.render_seconds".into(), format!("{:.6}", stats.elapsed.as_secs_f64())));
-    meta
-}
-
 /// Loads, renders and writes the outputs. Output paths are checked before rendering, so a
 /// bad path fails in milliseconds, not after the render.
 pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
@@ -185,7 +156,7 @@ impl Outputs {
             Some((a, b)) if a >= b => {
                 return Err(Error::Usage(format!("--samples {a}..{b} is empty: give A..B with A < B")));
             }
-            Some(range) => Some((range, super::merge::part_path(&opts.output, range))),
+            Some(range) => Some((range, super::provenance::part_path(&opts.output, range))),
             None => None,
         };
         let png = (!opts.no_png && part.is_none())
@@ -209,13 +180,19 @@ impl Outputs {
             if range.0 == range.1 {
                 return Err(Error::Interrupted);
             }
-            let hash = super::merge::scene_fingerprint(made.loaded, made.scene_options)?;
-            let header =
-                super::merge::part_header(made.scene_name, hash, made.sampler, made.settings, range, &output.stats);
+            let hash = super::provenance::scene_fingerprint(made.loaded, made.scene_options)?;
+            let header = super::provenance::part_header(
+                made.scene_name,
+                hash,
+                made.sampler,
+                made.settings,
+                range,
+                &output.stats,
+            );
             crate::io::part::write(&path, &header, &output.film)?;
             written.push(path);
         } else {
-            let meta = provenance(made.scene_name, made.sampler, made.settings, &output.stats);
+            let meta = super::provenance::provenance(made.scene_name, made.sampler, made.settings, &output.stats);
             crate::io::exr::write(&opts.output, &output.film.layers(made.settings.aovs), &meta)?;
             written.push(opts.output.clone());
         }

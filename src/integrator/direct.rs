@@ -9,22 +9,12 @@
 
 use super::{RayCounters, Tally};
 use crate::geometry::{Ray, offset_ray_origin};
-use crate::light::{Light, LightId};
-use crate::light_sampler::{LightSampler, LightStrategy, ShadingContext};
+use crate::light::Light;
+use crate::light_sampler::{LightStrategy, ShadingContext};
 use crate::material::ShadingPoint;
 use crate::math::{Rgb, Vec3A, luminance, power_heuristic};
 use crate::sampling::{Dim, SampleStream};
 use crate::scene::Scene;
-
-/// Probability that NEE at `ctx` picks `light`: 1 at a point where it took every light
-/// (`every`, [`LightStrategy::takes_every_light`]).
-#[inline]
-pub fn selection_pmf(strategy: &LightStrategy, ctx: &ShadingContext, light: LightId, every: bool) -> f32 {
-    match strategy.sampler() {
-        Some(s) if !every => s.pmf(ctx, light),
-        _ => 1.0,
-    }
-}
 
 /// The contribution of one chosen light, divided by its selection probability `pmf`, through
 /// the volume of absorption `medium` the point lies in. `observe(c, visible)` hears of each
@@ -59,7 +49,7 @@ fn light_contribution(
     // Only a light on this side of the surface is reached through the volume the point is in;
     // towards the far side the ray leaves it at once.
     let inside = medium != Rgb::ZERO && ls.wi.dot(sp.n_geom) > 0.0;
-    let through = if inside { super::path::transmittance(medium, ls.distance) } else { Rgb::ONE };
+    let through = if inside { super::transmittance(medium, ls.distance) } else { Rgb::ONE };
     let unshadowed = f * ls.radiance * through / (pmf * ls.pdf);
     observe(luminance(unshadowed), !occluded);
     if occluded {
@@ -103,11 +93,7 @@ pub fn estimate_direct(
                     debug_assert!(s.pmf > 0.0);
                     let light = &scene.lights[s.light.0 as usize];
                     let Tally { rays, seen } = tally;
-                    let observe = |c, visible| {
-                        if let (Some(seen), Some(learner)) = (seen.as_mut(), strategy.learner()) {
-                            learner.observe(seen, &ctx, s.light, c, visible);
-                        }
-                    };
+                    let observe = |c, visible| seen.record_light_sample(strategy, &ctx, s.light, c, visible);
                     light_contribution(scene, light, s.pmf, sp, p, medium, u_point, rays, observe)
                 }
                 None => Rgb::ZERO,

@@ -2,20 +2,32 @@
 //!
 //! Owns: the per-path estimator ([`path::radiance`]), next-event estimation for one shading
 //! point ([`direct::estimate_direct`]), and the counters both keep. Depends on scene, material,
-//! light, light_sampler and sampling; knows nothing of pixels or threads.
+//! light, light_sampler, learning (what the paths record for whatever learns from them) and
+//! sampling; knows nothing of pixels or threads.
 
 pub mod direct;
 pub mod path;
 
 pub use path::FirstHit;
 
+use crate::learning::Seen;
+use crate::math::Rgb;
+
+/// What a path keeps of its light over `distance` in a volume of absorption `sigma`
+/// (Beer–Lambert): the glass a path travels through, for its segments and its light samples.
+#[inline]
+pub fn transmittance(sigma: Rgb, distance: f32) -> Rgb {
+    let d = -sigma * distance;
+    Rgb::new(d.x.exp(), d.y.exp(), d.z.exp())
+}
+
 /// What one worker's paths report besides their radiance.
 #[derive(Debug, Default)]
 pub struct Tally {
     /// Rays traced.
     pub rays: RayCounters,
-    /// What the light samples saw, kept when the light sampler learns from it.
-    pub seen: Option<crate::light_sampler::Observations>,
+    /// What the paths saw, for whatever learns from it (empty when nothing does).
+    pub seen: Seen,
 }
 
 /// Rays traced by one worker, summed at the end of a render (no atomics on the hot path).
@@ -28,16 +40,10 @@ pub struct RayCounters {
 }
 
 impl Tally {
-    /// Adds another worker's tally (what its light samples saw merged into this one's).
+    /// Adds another worker's tally (what its paths saw merged into this one's).
     pub fn merge(mut self, other: Tally) -> Tally {
         self.rays.add(&other.rays);
-        self.seen = match (self.seen, other.seen) {
-            (Some(mut a), Some(b)) => {
-                a.merge(b);
-                Some(a)
-            }
-            (a, b) => a.or(b),
-        };
+        self.seen = self.seen.merge(other.seen);
         self
     }
 }

@@ -2,12 +2,14 @@
 //!
 //! pbrt-v4's `PathIntegrator` structure. At every vertex: add emission (MIS-weighted against
 //! NEE when the vertex was found by BSDF sampling), stop at `max_depth` scattering events
-//! (1 = direct lighting only), estimate direct light, sample the BSDF, apply Russian roulette
-//! after three scattering events. Every random number is addressed by (bounce, `Dim`), so the
-//! choices of one decision never shift another's numbers.
+//! (1 = direct lighting only), estimate direct light, sample the BSDF, and from the fourth
+//! scattering event on ([`RR_MIN_DEPTH`]) play Russian roulette. Every random number is
+//! addressed by (bounce, `Dim`), so the choices of one decision never shift another's
+//! numbers.
 
 use super::Tally;
-use super::direct::{estimate_direct, selection_pmf};
+use super::direct::estimate_direct;
+use super::transmittance;
 use crate::geometry::{Ray, SurfaceHit};
 use crate::light::{Light, LightId};
 use crate::light_sampler::{LightStrategy, ShadingContext};
@@ -53,13 +55,6 @@ pub struct PathSample {
     pub first_hit: Option<FirstHit>,
 }
 
-/// What a path keeps of its light over `distance` in a volume of absorption `sigma`.
-#[inline]
-pub fn transmittance(sigma: Rgb, distance: f32) -> Rgb {
-    let d = -sigma * distance;
-    Rgb::new(d.x.exp(), d.y.exp(), d.z.exp())
-}
-
 /// The vertex a BSDF-sampled ray left from, for the MIS weight where the ray meets a light.
 #[derive(Clone, Copy, Debug)]
 struct Previous {
@@ -93,7 +88,7 @@ fn bsdf_hit_weight(
     match prev {
         None => 1.0,
         Some(v) => {
-            let pmf = selection_pmf(strategy, &v.ctx, LightId(id), v.every_light);
+            let pmf = strategy.selection_pmf(&v.ctx, LightId(id), v.every_light);
             power_heuristic(v.bsdf_pdf, pmf * light_pdf(&v.ctx))
         }
     }

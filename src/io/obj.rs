@@ -1,7 +1,7 @@
 //! Wavefront `.obj` (+ `.mtl`) → meshes and materials, through tobj.
 //!
 //! Each `o`/`g` group becomes a mesh (polygons triangulated by tobj). Material mapping
-//! (documented in README "Scene formats"): `Kd` → base colour (default 0.8 grey), `Ke` →
+//! (documented in docs/scene-format.md): `Kd` → base colour (default 0.8 grey), `Ke` →
 //! emitted radiance (one-sided: the counter-clockwise side emits), `Ks` → specular factor
 //! (max component), `Ns` → roughness = (2/(Ns+2))^¼ (the Blinn-Phong exponent's
 //! Beckmann-equivalent alpha, alpha = roughness²), the PBR extension keys `Pr`/`Pm`

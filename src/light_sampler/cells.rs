@@ -1,9 +1,9 @@
 //! `cells`: the per-point weighting of `local`, tabulated once per cell of space where a table
 //! can stand for the cell, and the light tree where it cannot.
 //!
-//! Space is cut into a grid of cubes ([`CELLS_PER_RADIUS`] along the scene's radius, over the
-//! cube about its bounding sphere) times seven normal bins (the dominant axis and sign of the
-//! normal, and one for points off surfaces). The first time a shading point falls in a cell,
+//! Space is cut into the cells of the scene's grid (`grid.rs`: cubes of an eighth of its
+//! radius, times seven normal bins: the dominant axis and sign of the normal, and one for
+//! points off surfaces). The first time a shading point falls in a cell,
 //! the cell is built: every light's importance (`BoundsPacket::importance`, as `local` and the
 //! tree weigh lights) is taken along the bin's axis at the cell's centre and eight corners
 //! (a surface through the cell, a floor on its face, may pass near any of them), as a share
@@ -17,7 +17,7 @@
 //! leaves the choice to the light tree at the point itself. Elsewhere a choice is a count
 //! over the cell's [`Table16`] (lights in `local`'s Morton order, 2¹⁶ values shared among
 //! them: with the uniform share each of at
-//! most [`MAX_LIGHTS`] lights owns at least 25), with no importance evaluated, where the
+//! most [`MAX_LIGHTS`] lights owns at least 6), with no importance evaluated, where the
 //! tree evaluates four on every level it descends.
 //!
 //! A cell's content is a pure function of the cell, so which thread builds it first changes
@@ -32,6 +32,7 @@
 use std::sync::OnceLock;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use super::grid::{self, SceneGrid};
 use super::local::LocalSampler;
 use super::tree::LightTree;
 use super::{LightSampler, SampledLight, ShadingContext};
@@ -39,8 +40,6 @@ use crate::light::{Light, LightId};
 use crate::math::Vec3A;
 use crate::math::distribution::Table16;
 
-/// Grid cells along the scene's radius (a cell's edge is radius / this).
-pub const CELLS_PER_RADIUS: f32 = 8.0;
 /// Share of every table's probability spread evenly over all lights.
 pub const UNIFORM_SHARE: f32 = 0.1;
 /// A table stands for its cell when no light's share at a corner exceeds this many times
@@ -83,11 +82,6 @@ pub const SPLITS: u32 = 2;
 /// share each of this many lights owns at least 6 of a table's 2¹⁶ values.
 pub const MAX_LIGHTS: usize = 1024;
 const _: () = assert!(MAX_LIGHTS <= Table16::MAX && UNIFORM_SHARE / MAX_LIGHTS as f32 * Table16::VALUES as f32 >= 6.0);
-/// Cells along each axis of the grid.
-const SIDE: usize = 2 * CELLS_PER_RADIUS as usize + 1;
-/// Normal bins: ±x, ±y, ±z and none.
-const BINS: usize = 7;
-
 /// What a cell chooses with.
 #[derive(Debug)]
 enum Cell {
@@ -104,7 +98,7 @@ enum Cell {
 /// cell and its halves, and a table in each of the smallest (a split cell has none, so at
 /// most 8^`splits` tables a grid cell).
 pub fn most_bytes(lights: usize, splits: u32) -> u64 {
-    let grid = (SIDE * SIDE * SIDE * BINS) as u64;
+    let grid = grid::CELLS as u64;
     let slots: u64 = (0..=splits).map(|l| 8u64.pow(l)).sum();
     let tables = 8u64.pow(splits);
     grid * (slots * std::mem::size_of::<OnceLock<Cell>>() as u64 + tables * Table16::bytes_for(lights) as u64)
@@ -147,14 +141,9 @@ pub struct CellStats {
 pub struct CellSampler {
     local: LocalSampler,
     tree: LightTree,
-    /// Corner of the grid.
-    origin: Vec3A,
-    /// Edge of a cell.
-    edge: f32,
+    grid: SceneGrid,
     /// Most halvings of a grid cell before the tree takes over.
     halvings: u32,
-    /// Its reciprocal.
-    per_edge: f32,
     /// Every grid cell, built on first use.
     cells: Vec<OnceLock<Cell>>,
     /// Cells built so far with a table, split, and left to the tree.
@@ -179,16 +168,7 @@ impl Clone for CellSampler {
 }
 
 fn empty_cells() -> Vec<OnceLock<Cell>> {
-    (0..SIDE * SIDE * SIDE * BINS).map(|_| OnceLock::new()).collect()
-}
-
-/// The receiver normal of bin `bin` (zero for the bin of points off surfaces).
-fn bin_normal(bin: usize) -> Vec3A {
-    let mut n = Vec3A::ZERO;
-    if bin < 6 {
-        n[bin / 2] = if bin & 1 == 0 { 1.0 } else { -1.0 };
-    }
-    n
+    (0..grid::CELLS).map(|_| OnceLock::new()).collect()
 }
 
 impl CellSampler {
@@ -198,13 +178,10 @@ impl CellSampler {
     pub fn new(lights: &[Light], centre: Vec3A, radius: f32, halvings: u32) -> Self {
         assert!(!lights.is_empty() && lights.len() <= MAX_LIGHTS, "1 to {MAX_LIGHTS} lights");
         assert!(halvings <= SPLITS, "at most {SPLITS} halvings");
-        let radius = radius.max(1e-6);
         Self {
             local: LocalSampler::new(lights),
             tree: LightTree::new(lights),
-            origin: centre - Vec3A::splat(radius),
-            edge: radius / CELLS_PER_RADIUS,
-            per_edge: CELLS_PER_RADIUS / radius,
+            grid: SceneGrid::new(centre, radius),
             halvings,
             cells: empty_cells(),
             tables: AtomicUsize::new(0),
@@ -221,7 +198,7 @@ impl CellSampler {
             + self.tree.stats().memory_bytes
             + (self.cells.len() + 8 * splits) * std::mem::size_of::<OnceLock<Cell>>()
             + tables * Table16::bytes_for(self.local.lights());
-        CellStats { edge: self.edge, halvings: self.halvings, tables, splits, on_tree, memory_bytes }
+        CellStats { edge: self.grid.edge(), halvings: self.halvings, tables, splits, on_tree, memory_bytes }
     }
 
     /// The tree's choice, out of line: it is the rare case, and inlined beside the table's
@@ -231,10 +208,10 @@ impl CellSampler {
         self.tree.sample(ctx, u)
     }
 
-    /// The tree's cell, out of line (see [`tree_sample`](Self::tree_sample)).
+    /// The tree's interval, out of line (see [`tree_sample`](Self::tree_sample)).
     #[inline(never)]
-    fn tree_cell(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
-        self.tree.cell(ctx, light)
+    fn tree_interval(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
+        self.tree.interval(ctx, light)
     }
 
     /// The light tree it chooses with where a table would not do.
@@ -242,26 +219,13 @@ impl CellSampler {
         &self.tree
     }
 
-    /// The grid cell of `ctx` (its position clamped to the grid, and its normal bin): its
-    /// index and its lowest corner.
-    #[inline]
-    fn grid_cell(&self, ctx: &ShadingContext) -> (usize, Vec3A) {
-        let f = ((ctx.p - self.origin) * self.per_edge).clamp(Vec3A::ZERO, Vec3A::splat(SIDE as f32 - 0.5));
-        // Non-negative, so truncation floors (one instruction a lane, where glam's `floor`
-        // takes several); whole numbers below 2²⁴ throughout, so exact in f32: one
-        // conversion for the three.
-        let q = Vec3A::new(f.x.trunc(), f.y.trunc(), f.z.trunc());
-        let flat = q.dot(Vec3A::new((SIDE * SIDE) as f32, SIDE as f32, 1.0)) as u32 as usize;
-        (flat * BINS + super::normal_bin(ctx.n), self.origin + q * self.edge)
-    }
-
     /// What chooses at `ctx`: the table of the smallest cell holding it, or the tree. Cells
     /// are built on first use.
     #[inline]
     fn choice(&self, ctx: &ShadingContext) -> Option<&Table16> {
-        let (index, mut corner) = self.grid_cell(ctx);
-        let (mut edge, mut level) = (self.edge, 0);
-        let bin = index % BINS;
+        let (index, mut corner) = self.grid.locate(ctx);
+        let (mut edge, mut level) = (self.grid.edge(), 0);
+        let bin = index % grid::BINS;
         let mut cell = self.built(&self.cells[index], corner, edge, bin, level);
         loop {
             match cell {
@@ -308,7 +272,7 @@ impl CellSampler {
     fn build(&self, corner: Vec3A, edge: f32, bin: usize, level: u32) -> Cell {
         let last = level == self.halvings;
         let trust = if last { LAST_TRUST } else { TRUST };
-        let cell = self.table(corner, edge, bin_normal(bin), trust).map_or_else(
+        let cell = self.table(corner, edge, grid::bin_normal(bin), trust).map_or_else(
             || {
                 if !last { Cell::Split(Box::new(std::array::from_fn(|_| OnceLock::new()))) } else { Cell::Tree }
             },
@@ -367,10 +331,10 @@ impl LightSampler for CellSampler {
     }
 
     #[inline]
-    fn cell(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
+    fn interval(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
         match self.choice(ctx) {
-            Some(t) => t.cell(self.local.slot_of(light)),
-            None => self.tree_cell(ctx, light),
+            Some(t) => t.interval(self.local.slot_of(light)),
+            None => self.tree_interval(ctx, light),
         }
     }
 }
@@ -459,7 +423,7 @@ mod tests {
 
     /// Every light's cell at `ctx` is as its pmf says, and the cells tile the 2⁶⁴ values.
     fn check_tiling(s: &CellSampler, ctx: &ShadingContext, n: u32) {
-        let mut cells: Vec<_> = (0..n).map(|l| s.cell(ctx, LightId(l))).collect();
+        let mut cells: Vec<_> = (0..n).map(|l| s.interval(ctx, LightId(l))).collect();
         for (l, c) in cells.iter().enumerate() {
             assert_eq!(s.pmf(ctx, LightId(l as u32)), crate::math::distribution::probability(c.1 - c.0));
         }

@@ -2,8 +2,8 @@
 //!
 //! The tree weighs a cluster by power, distance and orientation and cannot see what stands
 //! between it and the point (Vévoda et al. 2018 learn that online; this is a cheap CPU form
-//! of it). Space is cut into cells (a grid of [`CELLS_PER_DIAMETER`] over the scene's
-//! diameter, times six normal directions, [`MAX_CELLS`] in all, looked up by index); for
+//! of it). Space is cut into the cells of the scene's grid (`grid.rs`: 17 along its
+//! diameter, times seven normal bins, [`grid::CELLS`] in all, looked up by index); for
 //! each cell and each cluster of the tree's first [`LEVELS`] levels ([`Frontier`]), every
 //! light sample's unshadowed contribution `c` (luminance of f·Le·G / (pmf·pdf)) and whether
 //! its shadow ray got through are summed. A cell where at least [`WORTH_LEARNING`] of that
@@ -18,7 +18,7 @@
 //! each of the [`LEVELS`] levels a child keeps at least β of its tree probability, so no
 //! light's pmf falls below β^LEVELS of the tree's, and none is ever 0 where the tree's is
 //! not. Below the top levels the tree chooses as it always does. Sampling and the pmf go
-//! through the same [`LightTree::sample_reweighted`] / [`LightTree::cell_reweighted`] with
+//! through the same [`LightTree::sample_reweighted`] / [`LightTree::interval_reweighted`] with
 //! the same factors, so MIS at a BSDF hit sees exactly the pmf the light was sampled with.
 //!
 //! **Deterministic and mergeable.** The factors change only between passes, at sample
@@ -36,6 +36,7 @@ use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use super::grid::{self, SceneGrid};
 use super::tree::{Frontier, LightTree, Reweight, WIDTH};
 use super::{LightSampler, SampledLight, ShadingContext};
 use crate::light::{Light, LightId};
@@ -45,8 +46,6 @@ use crate::sampling::fmix64;
 
 /// Levels of the tree whose choices are learned (up to 4³ = 64 clusters).
 pub const LEVELS: u32 = 3;
-/// Grid cells along the scene's diameter.
-pub const CELLS_PER_DIAMETER: f32 = 16.0;
 /// The tree's share β in each learned choice.
 pub const DEFENSIVE: f32 = 0.3;
 /// Pseudo-samples of full visibility every child starts with.
@@ -63,13 +62,6 @@ pub const FLAT_FACTORS: f32 = 1.5;
 /// on cornell-9x9 1.18 → 1.11 and on instanced_lamps.glb 1.03, relMSE unchanged there and
 /// on offices and rooms.
 pub const WORTH_LEARNING: f64 = 0.9;
-/// Cells along each axis of the grid over the scene's bounding sphere (its diameter is
-/// [`CELLS_PER_DIAMETER`] cells, and a point on the sphere may round up one more).
-const GRID: usize = CELLS_PER_DIAMETER as usize + 1;
-/// Normal bins of a cell ([`super::normal_bin`]).
-const BINS: usize = 7;
-/// Cells of the grid: the most a sampler can learn, which bounds its memory.
-pub const MAX_CELLS: usize = GRID * GRID * GRID * BINS;
 /// Marks a cell without learned factors in [`Factors::rows`].
 const UNLEARNED: u32 = u32::MAX;
 
@@ -181,7 +173,7 @@ pub struct LearnedLayout {
     pub top_nodes: usize,
     /// Edge of a grid cell, m.
     pub cell_size: f32,
-    /// Most bytes the sums and factors can take ([`MAX_CELLS`] cells).
+    /// Most bytes the sums and factors can take ([`grid::CELLS`] cells).
     pub max_bytes: usize,
 }
 
@@ -199,10 +191,7 @@ struct Factors {
 pub struct LearnedSampler {
     tree: Arc<LightTree>,
     frontier: Arc<Frontier>,
-    /// The grid's corner (the low corner of the scene's bounding cube).
-    corner: Vec3A,
-    /// 1 / cell edge.
-    inv_cell: f32,
+    grid: SceneGrid,
     factors: Arc<Factors>,
     /// Sums over every pass learned from, per cell: one entry per cluster.
     sums: Observations,
@@ -216,12 +205,10 @@ impl LearnedSampler {
     pub fn new(lights: &[Light], scene_centre: Vec3A, scene_radius: f32) -> Self {
         let tree = LightTree::new(lights);
         let frontier = Frontier::new(&tree, LEVELS);
-        let radius = scene_radius.max(1e-6);
         Self {
             tree: Arc::new(tree),
             frontier: Arc::new(frontier),
-            corner: scene_centre - Vec3A::splat(radius),
-            inv_cell: CELLS_PER_DIAMETER / (2.0 * radius),
+            grid: SceneGrid::new(scene_centre, scene_radius),
             factors: Arc::default(),
             sums: Observations::default(),
             stats: LearnedStats::default(),
@@ -240,7 +227,7 @@ impl LearnedSampler {
     }
 
     /// Bytes of the factors' index over the whole grid, once anything is learned.
-    const INDEX_BYTES: usize = MAX_CELLS * 4;
+    const INDEX_BYTES: usize = grid::CELLS * 4;
 
     /// Its clusters, cells and memory bound.
     pub fn layout(&self) -> LearnedLayout {
@@ -248,8 +235,8 @@ impl LearnedSampler {
         LearnedLayout {
             clusters: self.frontier.clusters,
             top_nodes: self.frontier.runs.len(),
-            cell_size: 1.0 / self.inv_cell,
-            max_bytes: MAX_CELLS * (sums + factors) + Self::INDEX_BYTES,
+            cell_size: self.grid.edge(),
+            max_bytes: grid::CELLS * (sums + factors) + Self::INDEX_BYTES,
         }
     }
 
@@ -273,20 +260,10 @@ impl LearnedSampler {
             + self.factors.rows.len() * 4
     }
 
-    /// The cell of a shading context: its place in the grid and the dominant axis and sign
-    /// of its normal (a seventh bin for points off surfaces); `None` outside the grid.
-    #[inline]
-    fn cell_of(&self, ctx: &ShadingContext) -> Option<u32> {
-        let q = ((ctx.p - self.corner) * self.inv_cell).floor();
-        let inside = q.cmpge(Vec3A::ZERO).all() && q.cmplt(Vec3A::splat(GRID as f32)).all();
-        let (x, y, z) = (q.x as usize, q.y as usize, q.z as usize);
-        inside.then(|| (((x * GRID + y) * GRID + z) * BINS + super::normal_bin(ctx.n)) as u32)
-    }
-
     /// The learned factors at `ctx`, if its cell has any.
     #[inline]
     fn factors_at(&self, ctx: &ShadingContext) -> Option<&[f32]> {
-        let row = *self.factors.rows.get(self.cell_of(ctx)? as usize)?;
+        let row = *self.factors.rows.get(self.grid.locate(ctx).0)?;
         if row == UNLEARNED {
             return None;
         }
@@ -304,7 +281,10 @@ impl LearnedSampler {
     /// shadow ray got through.
     #[inline]
     pub fn observe(&self, seen: &mut Observations, ctx: &ShadingContext, light: LightId, c: f32, visible: bool) {
-        let Some(cell) = self.cell_of(ctx).filter(|_| c.is_finite() && c > 0.0) else { return };
+        if !(c.is_finite() && c > 0.0) {
+            return;
+        }
+        let cell = self.grid.locate(ctx).0 as u32;
         let cluster = self.frontier.cluster[light.0 as usize] as usize;
         let s = &mut seen.row(cell, self.frontier.clusters as usize)[cluster];
         let q = Fixed::of(c as f64, Fixed::SQUARE, Fixed::LIMIT);
@@ -329,7 +309,7 @@ impl LearnedSampler {
         let width = self.frontier.runs.len() * WIDTH;
         let mut cells: Vec<&(u32, Vec<Sums>)> = self.sums.cells.iter().collect();
         cells.sort_unstable_by_key(|(cell, _)| *cell);
-        let mut f = Factors { rows: vec![UNLEARNED; MAX_CELLS], v: Vec::with_capacity(cells.len() * width) };
+        let mut f = Factors { rows: vec![UNLEARNED; grid::CELLS], v: Vec::with_capacity(cells.len() * width) };
         let mut row = Vec::with_capacity(width);
         for (cell, sums) in cells {
             let (arrived, offered) = sums.iter().fold((0, 0), |(a, o), s| (a + s.arrived, o + s.offered));
@@ -397,8 +377,8 @@ impl LightSampler for LearnedSampler {
     }
 
     #[inline]
-    fn cell(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
-        self.tree.cell_reweighted(ctx, light, &self.mixture(ctx))
+    fn interval(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
+        self.tree.interval_reweighted(ctx, light, &self.mixture(ctx))
     }
 }
 

@@ -4,7 +4,7 @@
 //! O(n) per shading point, and again for the pmf MIS needs at an emitter hit: the ideal the
 //! light tree approximates in O(log n). Importances are evaluated four lights at a time
 //! (`BoundsPacket`, SSE) into a per-thread scratch table (allocated once per thread), and the
-//! light is the one whose cell ([`Split`]) holds `u`. Cells in slot order keep the mapping
+//! light is the one whose interval ([`Split`]) holds `u`. Intervals in slot order keep the mapping
 //! from `u` to lights monotone, so stratified `u` stay stratified over the lights (pbrt's
 //! single-pass reservoir does not: its choice jumps around as `u` moves), and the slots are the
 //! lights' [`SpatialOrder`], so that neighbouring `u` pick neighbouring lights in space, not
@@ -83,7 +83,7 @@ impl LightSampler for LocalSampler {
         })
     }
 
-    fn cell(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
+    fn interval(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
         let slot = self.order.slot_of(light);
         SCRATCH.with_borrow_mut(|w| {
             self.importances(ctx, w);

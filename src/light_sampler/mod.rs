@@ -8,6 +8,7 @@
 //! `settings`.
 
 mod cells;
+mod grid;
 mod learned;
 mod local;
 mod order;
@@ -38,19 +39,6 @@ pub struct ShadingContext {
     pub n: Vec3A,
 }
 
-/// The bin of a receiver normal that `learned` and `cells` keep apart: 2·axis + (negative)
-/// for its dominant axis and sign, 6 for no normal (a point off surfaces).
-#[inline]
-pub(crate) fn normal_bin(n: Vec3A) -> usize {
-    let a = n.abs();
-    // x where it is the largest, else y where it is at least z, else z: in arithmetic,
-    // which compiles without branches (this runs at every light choice of `cells`).
-    let not_x = !(a.x >= a.y && a.x >= a.z) as usize;
-    let axis = not_x * (1 + !(a.y >= a.z) as usize);
-    let negative = (n.cmplt(Vec3A::ZERO).bitmask() as usize >> axis) & 1;
-    if n == Vec3A::ZERO { 6 } else { 2 * axis + negative }
-}
-
 /// A chosen light and the probability it was chosen with.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SampledLight {
@@ -62,12 +50,12 @@ pub struct SampledLight {
 
 /// Chooses one light for a shading point with one 64-bit random number.
 ///
-/// Contract: the 2⁶⁴ values of `u` are shared among the lights in disjoint [`cell`]s, so a
-/// light's probability is exactly its cell's width / 2⁶⁴ ([`pmf`]), and `sample` reports the
-/// very pmf that `pmf` computes; values in no cell make `sample` return `None` (no light can
-/// contribute); a cell is empty only where its light contributes nothing at `ctx`.
+/// Contract: the 2⁶⁴ values of `u` are shared among the lights in disjoint [`interval`]s, so a
+/// light's probability is exactly its interval's width / 2⁶⁴ ([`pmf`]), and `sample` reports the
+/// very pmf that `pmf` computes; values in no interval make `sample` return `None` (no light can
+/// contribute); an interval is empty only where its light contributes nothing at `ctx`.
 ///
-/// [`cell`]: LightSampler::cell
+/// [`interval`]: LightSampler::interval
 /// [`pmf`]: LightSampler::pmf
 pub trait LightSampler: Sync {
     /// Picks a light with `u` (all 2⁶⁴ values equally likely); `None` when no light can
@@ -75,11 +63,11 @@ pub trait LightSampler: Sync {
     fn sample(&self, ctx: &ShadingContext, u: u64) -> Option<SampledLight>;
     /// The values of `u` for which `sample` picks `light` at `ctx`: `start..end`, as
     /// (start, end); empty when it never does.
-    fn cell(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128);
-    /// Probability that `sample` picks `light` at `ctx`: its cell's share of the 2⁶⁴ values.
+    fn interval(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128);
+    /// Probability that `sample` picks `light` at `ctx`: its interval's share of the 2⁶⁴ values.
     #[inline]
     fn pmf(&self, ctx: &ShadingContext, light: LightId) -> f32 {
-        let (start, end) = self.cell(ctx, light);
+        let (start, end) = self.interval(ctx, light);
         probability(end - start)
     }
 }
@@ -115,14 +103,14 @@ impl LightSampler for AnyLightSampler {
     }
 
     #[inline]
-    fn cell(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
+    fn interval(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
         match self {
-            AnyLightSampler::Uniform(s) => s.cell(ctx, light),
-            AnyLightSampler::Power(s) => s.cell(ctx, light),
-            AnyLightSampler::Local(s) => s.cell(ctx, light),
-            AnyLightSampler::Tree(s) => s.cell(ctx, light),
-            AnyLightSampler::Learned(s) => s.cell(ctx, light),
-            AnyLightSampler::Cells(s) => s.cell(ctx, light),
+            AnyLightSampler::Uniform(s) => s.interval(ctx, light),
+            AnyLightSampler::Power(s) => s.interval(ctx, light),
+            AnyLightSampler::Local(s) => s.interval(ctx, light),
+            AnyLightSampler::Tree(s) => s.interval(ctx, light),
+            AnyLightSampler::Learned(s) => s.interval(ctx, light),
+            AnyLightSampler::Cells(s) => s.interval(ctx, light),
         }
     }
 }
@@ -240,6 +228,17 @@ impl LightStrategy {
         }
     }
 
+    /// Probability that next-event estimation at `ctx` picks `light`: 1 at a point where it
+    /// took every light (`every`, [`takes_every_light`](Self::takes_every_light)), else the
+    /// sampler's pmf. What NEE divides by and what the MIS weight at an emitter hit asks.
+    #[inline]
+    pub fn selection_pmf(&self, ctx: &ShadingContext, light: LightId, every: bool) -> f32 {
+        match self.sampler() {
+            Some(s) if !every => s.pmf(ctx, light),
+            _ => 1.0,
+        }
+    }
+
     /// The sampler that chooses one light where not every light is taken.
     #[inline]
     pub fn sampler(&self) -> Option<&AnyLightSampler> {
@@ -317,21 +316,5 @@ mod tests {
         assert!(!build(LightSamplerKind::Tree, 2).takes_every_light(true));
         let all = build(LightSamplerKind::All, 2);
         assert!(all.takes_every_light(false) && all.sampler().is_none());
-    }
-
-    #[test]
-    fn a_normal_falls_in_the_bin_of_its_dominant_axis_and_sign() {
-        let bins = [(Vec3A::X, 0), (-Vec3A::X, 1), (Vec3A::Y, 2), (-Vec3A::Y, 3), (Vec3A::Z, 4), (-Vec3A::Z, 5)];
-        for (n, bin) in bins {
-            assert_eq!(normal_bin(n), bin, "{n}");
-            // Tilted towards the other axes, short of them.
-            assert_eq!(normal_bin(n + 0.6 * (Vec3A::ONE - n.abs())), bin, "{n}");
-        }
-        // Ties go to the earlier axis; zero has its own bin, whatever the sign of its zeros.
-        assert_eq!(normal_bin(Vec3A::new(-1.0, 1.0, 1.0)), 1);
-        assert_eq!(normal_bin(Vec3A::new(0.0, -1.0, 1.0)), 3);
-        assert_eq!(normal_bin(Vec3A::new(0.2, 0.5, -0.5)), 2);
-        assert_eq!(normal_bin(Vec3A::ZERO), 6);
-        assert_eq!(normal_bin(-Vec3A::ZERO), 6);
     }
 }

@@ -50,7 +50,7 @@ impl LightSampler for PowerSampler {
     }
 
     #[inline]
-    fn cell(&self, _ctx: &ShadingContext, light: LightId) -> (u128, u128) {
-        self.distribution.cell(self.order.slot_of(light))
+    fn interval(&self, _ctx: &ShadingContext, light: LightId) -> (u128, u128) {
+        self.distribution.interval(self.order.slot_of(light))
     }
 }

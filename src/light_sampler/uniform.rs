@@ -8,7 +8,7 @@
 use super::order::SpatialOrder;
 use super::{LightSampler, SampledLight, ShadingContext};
 use crate::light::{Light, LightId};
-use crate::math::distribution::{RANGE, even_cell, even_pick, probability};
+use crate::math::distribution::{RANGE, even_interval, even_pick, probability};
 
 /// Picks each of `n` lights with probability 1/n.
 #[derive(Clone, Debug)]
@@ -39,13 +39,13 @@ impl LightSampler for UniformSampler {
     #[inline]
     fn sample(&self, _ctx: &ShadingContext, u: u64) -> Option<SampledLight> {
         let i = even_pick(u as u128, self.n(), RANGE);
-        let (start, end) = even_cell(i, self.n(), RANGE);
+        let (start, end) = even_interval(i, self.n(), RANGE);
         Some(SampledLight { light: self.order.light_at(i as usize), pmf: probability(end - start) })
     }
 
     #[inline]
-    fn cell(&self, _ctx: &ShadingContext, light: LightId) -> (u128, u128) {
+    fn interval(&self, _ctx: &ShadingContext, light: LightId) -> (u128, u128) {
         debug_assert!(light.0 < self.n());
-        even_cell(self.order.slot_of(light) as u32, self.n(), RANGE)
+        even_interval(self.order.slot_of(light) as u32, self.n(), RANGE)
     }
 }

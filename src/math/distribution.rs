@@ -3,24 +3,24 @@
 //! Owns: [`Split`], the one rule every light sampler uses to share the 2⁶⁴ equally likely
 //! values of a selection number among weights, and [`Distribution1D`], a table of that rule
 //! (the `power` sampler), and [`Table16`], the rule over 2¹⁶ values for a few positive weights
-//! (`cells`' per-cell tables). A weight's *cell* is the run of values that choose it, so its
-//! probability is exactly `cell width / 2⁶⁴`: the pmf a sampler reports is the probability it
+//! (`cells`' per-cell tables). A weight's *interval* is the run of values that choose it, so its
+//! probability is exactly `interval width / 2⁶⁴`: the pmf a sampler reports is the probability it
 //! realises, not an approximation of it (an f32 CDF drawn with a 24-bit number, as before, gave
 //! each of 10⁶ lights 16 or 17 of 2²⁴ values, up to 5 % off its reported pmf, and never chose a
 //! light below 2⁻²⁴).
 //!
-//! The rule: with `P` positive weights summing to `T` over a range of `R` values, the cell of
-//! weight `i` ends at `positive(≤ i) + ⌊acc(≤ i) / T · (R − P)⌋`, and the last positive cell
+//! The rule: with `P` positive weights summing to `T` over a range of `R` values, the interval of
+//! weight `i` ends at `positive(≤ i) + ⌊acc(≤ i) / T · (R − P)⌋`, and the last positive interval
 //! ends at `R`. Every positive weight thus owns at least one value (so anything with a positive
-//! weight can be chosen, as MIS assumes), a zero weight owns none, and the cells tile the
+//! weight can be chosen, as MIS assumes), a zero weight owns none, and the intervals tile the
 //! range. Weights are f32 summed in f64 in index order, the same order at sampling and at pmf
-//! time, so both see the same cells bit for bit. NaN and negative weights count as 0; when some
+//! time, so both see the same intervals bit for bit. NaN and negative weights count as 0; when some
 //! weights are infinite, they share the range equally and the finite ones get nothing.
 
 /// Number of equally likely values of a selection number (`u64`): 2⁶⁴.
 pub const RANGE: u128 = 1 << 64;
 
-/// Probability of a cell of `width` values out of [`RANGE`].
+/// Probability of an interval of `width` values out of [`RANGE`].
 #[inline]
 pub fn probability(width: u128) -> f32 {
     // u64 → f64 is one instruction where u128 → f64 is a library call; a width of 2⁶⁴ (the
@@ -29,22 +29,22 @@ pub fn probability(width: u128) -> f32 {
     (w * (1.0 / RANGE as f64)) as f32
 }
 
-/// The cell of entry `k` when `range` values are shared equally among `m` entries:
+/// The interval of entry `k` when `range` values are shared equally among `m` entries:
 /// `⌈k·range/m⌉ .. ⌈(k+1)·range/m⌉`, so every entry owns ⌊range/m⌋ or ⌈range/m⌉ values.
 #[inline]
-pub fn even_cell(k: u32, m: u32, range: u128) -> (u128, u128) {
+pub fn even_interval(k: u32, m: u32, range: u128) -> (u128, u128) {
     let start = |k: u32| (k as u128 * range).div_ceil(m as u128);
     (start(k), start(k + 1))
 }
 
-/// The entry whose [`even_cell`] holds `u` (`u < range`): ⌊u·m/range⌋.
+/// The entry whose [`even_interval`] holds `u` (`u < range`): ⌊u·m/range⌋.
 #[inline]
 pub fn even_pick(u: u128, m: u32, range: u128) -> u32 {
     // The whole range is 2⁶⁴: a shift, not a 128-bit division.
     if range == RANGE { ((u * m as u128) >> 64) as u32 } else { (u * m as u128 / range) as u32 }
 }
 
-/// Sharing `range` values among a sequence of weights, one cell after another.
+/// Sharing `range` values among a sequence of weights, one interval after another.
 #[derive(Clone, Copy, Debug)]
 pub struct Split {
     range: u128,
@@ -58,7 +58,7 @@ pub struct Split {
     acc: f64,
     /// Positive weights consumed so far.
     seen: u32,
-    /// End of the last cell.
+    /// End of the last interval.
     end: u128,
 }
 
@@ -102,7 +102,7 @@ impl Split {
         Some(Self { range, spread, scale, positive, infinite, acc: 0.0, seen: 0, end: 0 })
     }
 
-    /// The cell of the next weight: `start..end` as (start, end).
+    /// The interval of the next weight: `start..end` as (start, end).
     #[inline(always)]
     pub fn next(&mut self, w: f32) -> (u128, u128) {
         let start = self.end;
@@ -129,11 +129,11 @@ impl Split {
 /// A discrete distribution over `0..len()`, drawn with one `u64`.
 #[derive(Clone, Debug, Default)]
 pub struct Distribution1D {
-    /// `starts[i]`: the first value of cell `i` (cells are consecutive), up to the last
+    /// `starts[i]`: the first value of interval `i` (intervals are consecutive), up to the last
     /// positive weight's, which ends at 2⁶⁴.
     starts: Vec<u64>,
     /// Entries in all, counting the zero weights after the last positive one (whose empty
-    /// cells start at 2⁶⁴, past what a `u64` holds).
+    /// intervals start at 2⁶⁴, past what a `u64` holds).
     len: usize,
 }
 
@@ -142,9 +142,9 @@ pub struct Distribution1D {
 pub struct DiscreteSample {
     /// Index drawn.
     pub index: usize,
-    /// Its probability: its cell's width / 2⁶⁴.
+    /// Its probability: its interval's width / 2⁶⁴.
     pub pmf: f32,
-    /// Where in its cell the number fell, in `[0,1)`: uniform given the index, free for a
+    /// Where in its interval the number fell, in `[0,1)`: uniform given the index, free for a
     /// continuous position within the entry (piecewise-constant densities).
     pub offset: f32,
 }
@@ -153,7 +153,7 @@ impl Distribution1D {
     /// Builds the distribution; `None` when no weight is positive.
     pub fn new(weights: &[f32]) -> Option<Self> {
         let mut split = Split::new(RANGE, weights.iter().copied())?;
-        // The last positive weight's cell ends at 2⁶⁴; the starts up to it fit a u64.
+        // The last positive weight's interval ends at 2⁶⁴; the starts up to it fit a u64.
         let last = weights.iter().rposition(|&w| clean(w, split.infinite) > 0.0)?;
         let starts = weights[..=last].iter().map(|&w| split.next(w).0 as u64).collect();
         Some(Self { starts, len: weights.len() })
@@ -171,7 +171,7 @@ impl Distribution1D {
 
     /// The values that choose `index`, as (start, end).
     #[inline]
-    pub fn cell(&self, index: usize) -> (u128, u128) {
+    pub fn interval(&self, index: usize) -> (u128, u128) {
         assert!(index < self.len, "index {index} out of {} entries", self.len);
         match self.starts.get(index) {
             Some(&start) => (start as u128, self.starts.get(index + 1).map_or(RANGE, |&s| s as u128)),
@@ -182,7 +182,7 @@ impl Distribution1D {
     /// Probability of `index`.
     #[inline]
     pub fn pmf(&self, index: usize) -> f32 {
-        let (start, end) = self.cell(index);
+        let (start, end) = self.interval(index);
         probability(end - start)
     }
 
@@ -190,10 +190,10 @@ impl Distribution1D {
     /// values and are never returned.
     #[inline]
     pub fn sample(&self, u: u64) -> DiscreteSample {
-        // The last cell starting at or before u; empty cells share their start with the
-        // next one, so the last of them is the non-empty cell holding u.
+        // The last interval starting at or before u; empty intervals share their start with the
+        // next one, so the last of them is the non-empty interval holding u.
         let index = self.starts.partition_point(|&s| s <= u) - 1;
-        let (start, end) = self.cell(index);
+        let (start, end) = self.interval(index);
         let offset = ((u as u128 - start) as f64 / (end - start) as f64).min(1.0 - f64::EPSILON) as f32;
         DiscreteSample { index, pmf: probability(end - start), offset: offset.min(1.0 - f32::EPSILON / 2.0) }
     }
@@ -205,23 +205,23 @@ impl Distribution1D {
 }
 
 /// A discrete distribution over a few positive weights in 2¹⁶ values: a quarter of a
-/// [`Distribution1D`]'s bytes, drawn with the top 16 bits of a `u64` by counting the cells
+/// [`Distribution1D`]'s bytes, drawn with the top 16 bits of a `u64` by counting the intervals
 /// below it with vector compares, whose loads do not wait on one another as the steps of a
 /// binary search do: what a table that is mostly cold in the cache wants (`cells`' per-cell
 /// tables). Up to [`Table16::FLAT`] stored values (two cache lines) are counted in one pass;
-/// a longer table keeps a summary, the last value of each block of [`Table16::LANES`] cells,
-/// and a draw counts the blocks below the value, then the cells below it in its block: two
+/// a longer table keeps a summary, the last value of each block of [`Table16::LANES`] intervals,
+/// and a draw counts the blocks below the value, then the intervals below it in its block: two
 /// short runs of the table instead of all of it (on glass.glb, 241 lights, the draw's share of
-/// the render's time fell from 3.2 % to 1.6 %). Its cells are [`Split`]'s over 2¹⁶ values, scaled to the
-/// 2⁶⁴ of a selection number, so `cell width / 2⁶⁴` is still the probability it realises.
+/// the render's time fell from 3.2 % to 1.6 %). Its intervals are [`Split`]'s over 2¹⁶ values, scaled to the
+/// 2⁶⁴ of a selection number, so `interval width / 2⁶⁴` is still the probability it realises.
 #[derive(Clone, Debug)]
 pub struct Table16 {
-    /// The summary (none up to [`Table16::FLAT`] cell values), then the cells. The summary is
-    /// the last value of each block of cells, padded with `u16::MAX` to a multiple of
+    /// The summary (none up to [`Table16::FLAT`] interval values), then the intervals. The summary is
+    /// the last value of each block of intervals, padded with `u16::MAX` to a multiple of
     /// [`Table16::LANES`]: the blocks wholly below a value `v` are those whose last value is
-    /// `< v`. The cells are the last value of every
-    /// cell but the last (consecutive, none empty), then at least one `u16::MAX` up to a
-    /// multiple of [`Table16::LANES`]: the cells wholly below `v` are those whose last value
+    /// `< v`. The intervals are the last value of every
+    /// interval but the last (consecutive, none empty), then at least one `u16::MAX` up to a
+    /// multiple of [`Table16::LANES`]: the intervals wholly below `v` are those whose last value
     /// is `< v`, and the padding never is, so the block holding `v` is never past the end.
     values: Box<[u16]>,
     /// Entries.
@@ -236,9 +236,9 @@ impl Table16 {
     pub const MAX: usize = 4096;
     /// The values it shares among its entries.
     pub const VALUES: u32 = 1 << 16;
-    /// Cells in a block, and what the summary is padded to (one 256-bit compare).
+    /// Intervals in a block, and what the summary is padded to (one 256-bit compare).
     const LANES: usize = 16;
-    /// Most stored cell values counted in one pass, with no summary.
+    /// Most stored interval values counted in one pass, with no summary.
     const FLAT: usize = 64;
     /// Bits a selection number is shifted by: its top 16 choose.
     const SHIFT: u32 = 48;
@@ -253,7 +253,7 @@ impl Table16 {
         let mut split = Split::new(Self::VALUES as u128, weights.iter().copied())?;
         let mut lasts: Vec<u16> = weights.iter().map(|&w| (split.next(w).1 - 1) as u16).collect();
         lasts.pop();
-        lasts.resize(Self::cells_padded(weights.len()), u16::MAX);
+        lasts.resize(Self::intervals_padded(weights.len()), u16::MAX);
         let summary = Self::summary_padded(weights.len());
         let mut values: Vec<u16> =
             lasts.chunks_exact(Self::LANES).map(|block| block[Self::LANES - 1]).take(summary).collect();
@@ -272,7 +272,7 @@ impl Table16 {
         self.len == 0
     }
 
-    /// The last value of every cell but the last, then the padding.
+    /// The last value of every interval but the last, then the padding.
     #[inline]
     fn lasts(&self) -> &[u16] {
         &self.values[self.summary as usize..]
@@ -280,15 +280,15 @@ impl Table16 {
 
     /// The selection numbers that choose `index`, as (start, end) out of [`RANGE`].
     #[inline]
-    pub fn cell(&self, index: usize) -> (u128, u128) {
-        let (start, end) = self.cell16(index);
+    pub fn interval(&self, index: usize) -> (u128, u128) {
+        let (start, end) = self.interval16(index);
         ((start as u128) << Self::SHIFT, (end as u128) << Self::SHIFT)
     }
 
-    /// The cell of `index` among the 2¹⁶ values. The first padding value is the last
-    /// cell's last value, so every cell ends one past its entry's stored value.
+    /// The interval of `index` among the 2¹⁶ values. The first padding value is the last
+    /// interval's last value, so every interval ends one past its entry's stored value.
     #[inline]
-    fn cell16(&self, index: usize) -> (u32, u32) {
+    fn interval16(&self, index: usize) -> (u32, u32) {
         assert!(index < self.len(), "index {index} out of {} entries", self.len);
         let lasts = self.lasts();
         let start = if index == 0 { 0 } else { lasts[index - 1] as u32 + 1 };
@@ -306,8 +306,8 @@ impl Table16 {
             let first = Self::below(summary, v) * Self::LANES;
             first + Self::below(&lasts[first..first + Self::LANES], v)
         };
-        let (start, end) = self.cell16(index);
-        // Exact: at most 2¹⁶ over 2¹⁶, the same f32 as `probability` of the 2⁶⁴-scaled cell.
+        let (start, end) = self.interval16(index);
+        // Exact: at most 2¹⁶ over 2¹⁶, the same f32 as `probability` of the 2⁶⁴-scaled interval.
         (index, (end - start) as f32 / Self::VALUES as f32)
     }
 
@@ -334,20 +334,20 @@ impl Table16 {
 
     /// Bytes a table of `len` entries holds.
     pub fn bytes_for(len: usize) -> usize {
-        (Self::summary_padded(len) + Self::cells_padded(len)) * std::mem::size_of::<u16>()
+        (Self::summary_padded(len) + Self::intervals_padded(len)) * std::mem::size_of::<u16>()
     }
 
-    /// Stored cell values for `len` entries: the last values of all but the last, and at
+    /// Stored interval values for `len` entries: the last values of all but the last, and at
     /// least one of padding.
-    fn cells_padded(len: usize) -> usize {
+    fn intervals_padded(len: usize) -> usize {
         len.max(1).next_multiple_of(Self::LANES)
     }
 
     /// Stored summary values for `len` entries.
     fn summary_padded(len: usize) -> usize {
-        match Self::cells_padded(len) {
-            cells if cells <= Self::FLAT => 0,
-            cells => (cells / Self::LANES).next_multiple_of(Self::LANES),
+        match Self::intervals_padded(len) {
+            intervals if intervals <= Self::FLAT => 0,
+            intervals => (intervals / Self::LANES).next_multiple_of(Self::LANES),
         }
     }
 }
@@ -356,8 +356,8 @@ impl Table16 {
 mod tests {
     use super::*;
 
-    /// The cells of `weights` over `range`, in order.
-    fn cells(range: u128, weights: &[f32]) -> Vec<(u128, u128)> {
+    /// The intervals of `weights` over `range`, in order.
+    fn intervals(range: u128, weights: &[f32]) -> Vec<(u128, u128)> {
         let mut s = Split::new(range, weights.iter().copied()).unwrap();
         weights.iter().map(|&w| s.next(w)).collect()
     }
@@ -377,14 +377,14 @@ mod tests {
     fn cells_tile_the_range_and_follow_the_weights() {
         let w = [0.0, 1.0, 3.0, 0.0, 4.0, 0.5, 0.0];
         for range in [RANGE, 1000, 7, 4] {
-            let c = cells(range, &w);
+            let c = intervals(range, &w);
             assert_eq!(c[0].0, 0);
             assert_eq!(c.last().unwrap().1, range);
             for k in 1..c.len() {
                 assert_eq!(c[k].0, c[k - 1].1, "contiguous");
             }
             for (i, &(a, b)) in c.iter().enumerate() {
-                assert_eq!(b == a, w[i] == 0.0, "range {range}, cell {i}");
+                assert_eq!(b == a, w[i] == 0.0, "range {range}, interval {i}");
                 if range == RANGE {
                     let p = (b - a) as f64 / RANGE as f64;
                     assert!((p - w[i] as f64 / 8.5).abs() < 1e-15, "{i}: {p}");
@@ -392,14 +392,14 @@ mod tests {
             }
         }
         // Three values among four positive weights: the first three get one each.
-        assert_eq!(cells(3, &[1.0, 1.0, 1.0, 1.0]), [(0, 1), (1, 2), (2, 3), (3, 3)]);
+        assert_eq!(intervals(3, &[1.0, 1.0, 1.0, 1.0]), [(0, 1), (1, 2), (2, 3), (3, 3)]);
     }
 
     #[test]
     fn a_tiny_weight_still_owns_a_value() {
         let mut w = vec![1.0f32; 1000];
         w[500] = 1e-30;
-        let c = cells(RANGE, &w);
+        let c = intervals(RANGE, &w);
         assert!(c[500].1 > c[500].0);
     }
 
@@ -408,11 +408,11 @@ mod tests {
         assert!(Split::new(RANGE, [0.0f32, -1.0, f32::NAN]).is_none());
         assert!(Distribution1D::new(&[]).is_none());
         // Infinite weights share everything; finite ones get nothing.
-        let c = cells(RANGE, &[1.0, f32::INFINITY, 5.0, f32::INFINITY]);
+        let c = intervals(RANGE, &[1.0, f32::INFINITY, 5.0, f32::INFINITY]);
         let half = c[1].1;
         assert!(half.abs_diff(RANGE / 2) <= 1, "{half}");
         assert_eq!(c, [(0, 0), (0, half), (half, half), (half, RANGE)]);
-        let c = cells(RANGE, &[f32::NAN, 2.0, -3.0]);
+        let c = intervals(RANGE, &[f32::NAN, 2.0, -3.0]);
         assert_eq!(c, [(0, 0), (0, RANGE), (RANGE, RANGE)]);
     }
 
@@ -423,7 +423,7 @@ mod tests {
         let d = Distribution1D::new(&w).unwrap();
         let mut end = 0u128;
         for (i, &weight) in w.iter().enumerate() {
-            let (a, b) = d.cell(i);
+            let (a, b) = d.interval(i);
             assert_eq!(a, end);
             end = b;
             assert_eq!(d.pmf(i), probability(b - a));
@@ -452,12 +452,12 @@ mod tests {
             let t = Table16::new(&w).unwrap();
             assert_eq!(t.len(), n);
             assert_eq!(t.memory_bytes(), Table16::bytes_for(n));
-            // The same cells as the rule over 2¹⁶ values, scaled to 2⁶⁴.
-            let rule = cells(Table16::VALUES as u128, &w);
+            // The same intervals as the rule over 2¹⁶ values, scaled to 2⁶⁴.
+            let rule = intervals(Table16::VALUES as u128, &w);
             let mut end = 0u128;
             for (i, &(a, b)) in rule.iter().enumerate() {
-                let (start, stop) = t.cell(i);
-                assert_eq!((start, stop), (a << 48, b << 48), "{n} entries, cell {i}");
+                let (start, stop) = t.interval(i);
+                assert_eq!((start, stop), (a << 48, b << 48), "{n} entries, interval {i}");
                 assert!(stop > start && start == end);
                 end = stop;
                 for u in [start, stop - 1, (start + stop) / 2] {
@@ -479,6 +479,6 @@ mod tests {
         let mut w = vec![1.0f32; 300];
         w[7] = 1e-6;
         let t = Table16::new(&w).unwrap();
-        assert_eq!(t.cell(7).1 - t.cell(7).0, 1 << 48);
+        assert_eq!(t.interval(7).1 - t.interval(7).0, 1 << 48);
     }
 }

@@ -94,8 +94,8 @@ pub struct ChiSquare {
     pub p: f64,
 }
 
-/// Pearson's chi-square of `observed` counts against `expected` counts (same total). Cells
-/// expected below 5 are pooled (Mitsuba's `chi2.py`); an observation in a cell with expectation
+/// Pearson's chi-square of `observed` counts against `expected` counts (same total). Intervals
+/// expected below 5 are pooled (Mitsuba's `chi2.py`); an observation in an interval with expectation
 /// 0 is an immediate failure (returns p = 0).
 pub fn chi_square(observed: &[f64], expected: &[f64]) -> ChiSquare {
     let mut idx: Vec<usize> = (0..observed.len()).collect();
@@ -237,45 +237,45 @@ pub fn draw(k: u64, salt: u64) -> u64 {
     fmix64(fmix64(salt ^ 0x5851_f42d_4c95_7f2d) ^ k.wrapping_mul(0x9e37_79b9_7f4a_7c15))
 }
 
-/// The lights' cells at `ctx` tile the 2⁶⁴ values (apart from values that pick nothing, where
-/// `sample` must say `None`), every non-empty cell picks its light at both ends and reports its
+/// The lights' intervals at `ctx` tile the 2⁶⁴ values (apart from values that pick nothing, where
+/// `sample` must say `None`), every non-empty interval picks its light at both ends and reports its
 /// width as the pmf, and the pmfs sum to the share of values that pick something. Exact: no
 /// statistics.
-pub fn check_cells_at(sampler: &impl LightSampler, ctx: &ShadingContext, n: usize) {
-    let mut cells: Vec<(u128, u128, u32)> = (0..n as u32)
+pub fn check_intervals_at(sampler: &impl LightSampler, ctx: &ShadingContext, n: usize) {
+    let mut intervals: Vec<(u128, u128, u32)> = (0..n as u32)
         .map(|i| {
-            let (a, b) = sampler.cell(ctx, LightId(i));
-            assert!(a <= b && b <= RANGE, "light {i}: cell {a}..{b}");
+            let (a, b) = sampler.interval(ctx, LightId(i));
+            assert!(a <= b && b <= RANGE, "light {i}: interval {a}..{b}");
             assert_eq!(sampler.pmf(ctx, LightId(i)), probability(b - a), "light {i}");
             (a, b, i)
         })
         .filter(|c| c.1 > c.0)
         .collect();
-    cells.sort();
+    intervals.sort();
     let mut covered = 0u128;
     let mut end = 0u128;
-    for &(a, b, i) in &cells {
-        assert!(a >= end, "cells overlap at light {i}");
+    for &(a, b, i) in &intervals {
+        assert!(a >= end, "intervals overlap at light {i}");
         if a > end {
             // A gap: values that pick no light.
             assert_eq!(sampler.sample(ctx, end as u64), None, "gap before light {i}");
         }
         for u in [a, b - 1, a + (b - a) / 2] {
-            let s = sampler.sample(ctx, u as u64).unwrap_or_else(|| panic!("light {i}'s cell picks nothing"));
-            assert_eq!((s.light.0, s.pmf), (i, probability(b - a)), "value {u} in light {i}'s cell");
+            let s = sampler.sample(ctx, u as u64).unwrap_or_else(|| panic!("light {i}'s interval picks nothing"));
+            assert_eq!((s.light.0, s.pmf), (i, probability(b - a)), "value {u} in light {i}'s interval");
         }
         covered += b - a;
         end = b;
     }
     if end < RANGE {
-        assert_eq!(sampler.sample(ctx, u64::MAX), None, "values past the last cell");
+        assert_eq!(sampler.sample(ctx, u64::MAX), None, "values past the last interval");
     }
     let total: f64 = (0..n as u32).map(|i| sampler.pmf(ctx, LightId(i)) as f64).sum();
-    assert!((total - covered as f64 / RANGE as f64).abs() < 1e-5, "Σ pmf {total}, cells cover {covered}");
+    assert!((total - covered as f64 / RANGE as f64).abs() < 1e-5, "Σ pmf {total}, intervals cover {covered}");
 }
 
 /// Pick counts of `draws` independent numbers at `ctx` (drawn on every core) against the
-/// pmf, cells pooled to at least 5 expected picks, with one cell for `None`: a chi-square
+/// pmf, intervals pooled to at least 5 expected picks, with one interval for `None`: a chi-square
 /// test. Also checks that no pick has pmf 0.
 pub fn pick_chi_square(
     sampler: &impl LightSampler,

@@ -3,7 +3,7 @@
 //! against the exact sum over point lights (exact variance known, so a z-test needs no
 //! reference noise).
 
-use crate::common::{Stats, check_cells_at, draw, pick_chi_square, sidak, z_p_value};
+use crate::common::{Stats, check_intervals_at, draw, pick_chi_square, sidak, z_p_value};
 use myriad::light::{AreaEmission, DistantLight, Light, LightId, PointLight, QuadLight, SpotLight, TriangleLight};
 use myriad::light_sampler::{
     DEFENSIVE, LEVELS, LearnedSampler, LightSampler, LightStrategy, Observations, ShadingContext,
@@ -92,7 +92,7 @@ fn every_light_owns_the_values_its_pmf_says() {
     for kind in SAMPLERS {
         let s = one_light_sampler(kind, &lights);
         for ctx in &contexts(12) {
-            check_cells_at(&s, ctx, lights.len());
+            check_intervals_at(&s, ctx, lights.len());
             // Σ pmf = 1, except that the tree may find a dead branch (a cluster whose bounds
             // reach the point while none of its children's do): its values pick nothing. So
             // may `cells`, in the cells it leaves to the tree.
@@ -268,8 +268,8 @@ fn learned_sampler_moves_samples_off_hidden_lights_and_keeps_its_defensive_floor
     let alpha = sidak(ctxs.len());
     let (mut moved, mut eligible) = (0, 0);
     for (i, ctx) in ctxs.iter().enumerate() {
-        // The contract every sampler keeps: cells tile, picks follow the pmf.
-        check_cells_at(&learned, ctx, lights.len());
+        // The contract every sampler keeps: intervals tile, picks follow the pmf.
+        check_intervals_at(&learned, ctx, lights.len());
         let r = pick_chi_square(&learned, ctx, lights.len(), 50_000, i as u64);
         assert!(r.p > alpha, "learned at {ctx:?}: {r:?}");
         let (mut hidden_tree, mut hidden_learned) = (0.0f64, 0.0f64);
@@ -304,7 +304,7 @@ fn learned_sampler_outside_its_grid_samples_as_the_tree() {
     for p in [Vec3A::new(12.5, 0.0, 0.0), Vec3A::new(0.0, -30.0, 2.0), Vec3A::splat(1e9)] {
         let ctx = ShadingContext { p, n: Vec3A::Y };
         for l in 0..lights.len() as u32 {
-            assert_eq!(learned.cell(&ctx, LightId(l)), tree.cell(&ctx, LightId(l)), "light {l} at {p:?}");
+            assert_eq!(learned.interval(&ctx, LightId(l)), tree.interval(&ctx, LightId(l)), "light {l} at {p:?}");
         }
     }
 }
@@ -326,7 +326,11 @@ fn learned_sampler_keeps_the_tree_where_little_is_hidden() {
         if share < 0.03 {
             kept += 1;
             for l in ids() {
-                assert_eq!(learned.cell(ctx, l), tree.cell(ctx, l), "light {l:?} at {ctx:?} (hidden share {share})");
+                assert_eq!(
+                    learned.interval(ctx, l),
+                    tree.interval(ctx, l),
+                    "light {l:?} at {ctx:?} (hidden share {share})"
+                );
             }
         }
     }

@@ -241,7 +241,7 @@ fn save(
     let film = progressive.film();
     let path = dir.join(format!("view-{sampler}-{}spp.exr", film.spp()));
     let stats = crate::render::RenderStats { spp: film.spp(), elapsed, ..Default::default() };
-    let meta = crate::commands::render::provenance(&plan.scene_name, sampler, settings, &stats);
+    let meta = crate::commands::provenance::provenance(&plan.scene_name, sampler, settings, &stats);
     match crate::io::exr::write(&path, &film.layers(AovSet::default()), &meta) {
         Ok(()) => Report::Saved(path),
         Err(e) => Report::Failed(e.to_string()),

@@ -37,7 +37,7 @@ use self::compact::{Node, Quantizer};
 use super::{LightSampler, SampledLight, ShadingContext, prefetch};
 use crate::light::{Light, LightId};
 use crate::math::Vec3A;
-use crate::math::distribution::{RANGE, Split, even_cell, even_pick, probability};
+use crate::math::distribution::{RANGE, Split, even_interval, even_pick, probability};
 
 /// Children per node.
 pub const WIDTH: usize = 4;
@@ -81,7 +81,7 @@ pub struct LightTree {
 
 /// Changes the importances of node `node`'s children before they are split (a learned
 /// sampler's reweighting near the root). The same reweighting must be given to `sample`
-/// and `cell` for a pmf to match its sample.
+/// and `interval` for a pmf to match its sample.
 pub trait Reweight {
     /// Changes the weights `w` of node `node`'s children; returns whether it changed any.
     fn reweight(&self, node: usize, w: &mut [f32; WIDTH]) -> bool;
@@ -272,14 +272,14 @@ impl LightTree {
             let (imp, changed, mut split) = children_split(&self.nodes, node, &self.grid, ctx, range, reweight)?;
             if let Some(m) = self.flat(node, &imp).filter(|_| !changed) {
                 let k = even_pick(u, m, range);
-                let (a, b) = even_cell(k, m, range);
+                let (a, b) = even_interval(k, m, range);
                 let width = b - a;
                 let light = self.order[(self.spans[node].0 + k) as usize];
                 return Some(SampledLight { light: LightId(light), pmf: probability(width) });
             }
-            // The child whose cell holds u (the cells tile the range, so one does).
+            // The child whose interval holds u (the intervals tile the range, so one does).
             let (k, (start, end)) =
-                imp.iter().map(|&w| split.next(w)).enumerate().find(|(_, (_, end))| u < *end).expect("cells tile");
+                imp.iter().map(|&w| split.next(w)).enumerate().find(|(_, (_, end))| u < *end).expect("intervals tile");
             (u, range) = (u - start, end - start);
             let child = n.children[k];
             if child & LEAF != 0 {
@@ -298,16 +298,16 @@ impl LightSampler for LightTree {
     }
 
     #[inline]
-    fn cell(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
-        self.cell_reweighted(ctx, light, &AsBuilt)
+    fn interval(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
+        self.interval_reweighted(ctx, light, &AsBuilt)
     }
 }
 
 impl LightTree {
-    /// [`LightSampler::cell`] under the weights `reweight` gives, as
+    /// [`LightSampler::interval`] under the weights `reweight` gives, as
     /// [`sample_reweighted`](Self::sample_reweighted) draws with them.
     #[inline]
-    pub fn cell_reweighted(&self, ctx: &ShadingContext, light: LightId, reweight: &impl Reweight) -> (u128, u128) {
+    pub fn interval_reweighted(&self, ctx: &ShadingContext, light: LightId, reweight: &impl Reweight) -> (u128, u128) {
         let (mut trail, mut start, mut range, mut node) = (self.trails[light.0 as usize], 0u128, RANGE, 0usize);
         for _ in 0..MAX_DEPTH {
             let n = &self.nodes[node];
@@ -323,7 +323,7 @@ impl LightTree {
             };
             if let Some(m) = self.flat(node, &imp).filter(|_| !changed) {
                 let k = self.rank[light.0 as usize] - self.spans[node].0;
-                let (a, b) = even_cell(k, m, range);
+                let (a, b) = even_interval(k, m, range);
                 return (start + a, start + b);
             }
             let (a, b) = imp[..=k].iter().map(|&w| split.next(w)).last().expect("k < WIDTH");
@@ -382,19 +382,23 @@ mod tests {
             let u = at((k as f64 + 0.5) / 10_000.0);
             let s = tree.sample(&ctx, u).unwrap();
             assert_eq!(tree.pmf(&ctx, s.light), s.pmf);
-            let (start, end) = tree.cell(&ctx, s.light);
+            let (start, end) = tree.interval(&ctx, s.light);
             assert!(start <= u as u128 && (u as u128) < end);
         }
-        // The cells tile the range.
-        let mut cells: Vec<_> = (0..lights.len()).map(|i| tree.cell(&ctx, LightId(i as u32))).collect();
-        cells.sort();
-        assert!(cells.windows(2).all(|c| c[0].1 == c[1].0) && cells[0].0 == 0 && cells.last().unwrap().1 == RANGE);
+        // The intervals tile the range.
+        let mut intervals: Vec<_> = (0..lights.len()).map(|i| tree.interval(&ctx, LightId(i as u32))).collect();
+        intervals.sort();
+        assert!(
+            intervals.windows(2).all(|c| c[0].1 == c[1].0)
+                && intervals[0].0 == 0
+                && intervals.last().unwrap().1 == RANGE
+        );
     }
 
     #[test]
     fn far_even_lights_are_chosen_uniformly_and_their_cells_still_tile() {
         // Equal lamps seen from far away: the root's children look alike, so the choice is
-        // uniform over all of them, and sample, pmf and cells agree as everywhere else.
+        // uniform over all of them, and sample, pmf and intervals agree as everywhere else.
         let lights = equal_lamps(1000, 40, 0.1);
         let tree = LightTree::new(&lights);
         let far = ShadingContext { p: Vec3A::new(2.0, -500.0, 1.2), n: Vec3A::Y };
@@ -403,14 +407,14 @@ mod tests {
             let s = tree.sample(&far, u).unwrap();
             assert!((s.pmf * 1000.0 - 1.0).abs() < 1e-4, "pmf {}", s.pmf);
             assert_eq!(tree.pmf(&far, s.light), s.pmf);
-            let (start, end) = tree.cell(&far, s.light);
+            let (start, end) = tree.interval(&far, s.light);
             assert!(start <= u as u128 && (u as u128) < end);
         }
         let near = ShadingContext { p: Vec3A::new(0.3, 1.9, 0.3), n: Vec3A::Y };
         for ctx in [far, near] {
-            let mut cells: Vec<_> = (0..lights.len()).map(|i| tree.cell(&ctx, LightId(i as u32))).collect();
-            cells.sort();
-            assert!(cells.windows(2).all(|c| c[0].1 == c[1].0) && cells[0].0 == 0 && cells[999].1 == RANGE);
+            let mut intervals: Vec<_> = (0..lights.len()).map(|i| tree.interval(&ctx, LightId(i as u32))).collect();
+            intervals.sort();
+            assert!(intervals.windows(2).all(|c| c[0].1 == c[1].0) && intervals[0].0 == 0 && intervals[999].1 == RANGE);
         }
         // Close to one corner the choice is not uniform.
         assert!(tree.pmf(&near, LightId(0)) > 2.0 * tree.pmf(&near, LightId(999)));
