@@ -32,6 +32,20 @@ pub const BYTES_PER_LIGHT: u64 = 480;
 /// Bytes per placement of a shared mesh (the top-level BVH's entry and transform).
 pub const BYTES_PER_INSTANCE: u64 = 160;
 
+/// Most renders one command may plan: a comparison's runs (samplers × seeds), a Slurm job
+/// array's tasks. Each is a whole render, so more than this is a typo, not a plan; and
+/// Slurm's own array limit (`MaxArraySize`) is 1001 by default and rarely raised past 10⁴.
+pub const MAX_RUNS: u64 = 10_000;
+
+/// `Err(message)` when `runs` renders (`what`, e.g. "4 samplers × 100000 seeds") exceed
+/// [`MAX_RUNS`].
+pub fn check_runs(runs: u64, what: impl std::fmt::Display) -> Result<(), String> {
+    if runs <= MAX_RUNS {
+        return Ok(());
+    }
+    Err(format!("{what} would be {runs} renders; myriad plans at most {MAX_RUNS} in one command"))
+}
+
 /// Environment variable that sets the memory limit, in GB.
 pub const MEMORY_ENV: &str = "MYRIAD_MAX_MEMORY";
 
@@ -64,6 +78,20 @@ pub fn memory_limit() -> MemoryLimit {
 pub fn parse_gb(text: &str) -> Option<u64> {
     let gb: f64 = text.trim().parse().ok()?;
     (gb > 0.0 && gb <= 1e9).then_some((gb * 1e9) as u64)
+}
+
+/// `Err(message)` when [`MEMORY_ENV`] is set to something other than a positive number of
+/// GB: the command line refuses it as it refuses `--max-memory abc`, rather than fall back
+/// to the default the user meant to replace.
+pub fn check_memory_env() -> Result<(), String> {
+    match std::env::var(MEMORY_ENV) {
+        Ok(text) if parse_gb(&text).is_none() => Err(format!(
+            "{MEMORY_ENV}={text} is not a positive number of gigabytes (e.g. {MEMORY_ENV}=8); set it to one, or \
+             unset it for the default limit"
+        )),
+        Err(std::env::VarError::NotUnicode(_)) => Err(format!("{MEMORY_ENV} is not text; set it to a number of GB")),
+        _ => Ok(()),
+    }
 }
 
 fn default_limit() -> MemoryLimit {

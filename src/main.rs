@@ -35,6 +35,10 @@ struct Cli {
     /// process use; also MYRIAD_MAX_MEMORY].
     #[arg(long, global = true, value_parser = parse_gigabytes)]
     max_memory: Option<u64>,
+    /// Replace output files even where they are read-only (without it, a read-only file is
+    /// a file someone wanted kept, and myriad refuses to replace it).
+    #[arg(long, global = true)]
+    force: bool,
 }
 
 #[derive(Subcommand)]
@@ -44,6 +48,8 @@ enum Command {
     /// Without SCENE, renders the built-in Cornell box with a 5x5 grid of ceiling lights.
     /// Settings not given here come from the scene file's `render` block, then defaults
     /// (64 spp, max depth 8, sampler cells, seed 0).
+    #[command(mut_arg("spp", |a| a.help("Samples per pixel [default: the scene's, else 64]")))]
+    #[command(mut_arg("time", |a| a.help("Render whole passes until this many seconds are spent, instead of a fixed spp")))]
     Render(RenderArgs),
     /// Render a scene with several light samplers and measure each against a reference.
     ///
@@ -52,6 +58,10 @@ enum Command {
     /// Writes each render, a false-colour error map, a labelled contact sheet, a plot of relMSE
     /// against time (SVG), report.md, report.json and report.html (a page to flip, zoom and
     /// read the images) to the output folder, and prints the table.
+    #[command(mut_arg("spp", |a| a.help("Samples per pixel of every run: equal spp [default: the scene's, else 16]")))]
+    #[command(mut_arg("time", |a| a.help("Seconds every run renders (whole passes), per sampler and seed: equal time")))]
+    #[command(mut_arg("seed", |a| a.help("Base seed: the runs use the K seeds after it (--seeds K)")))]
+    #[command(mut_arg("exposure", |a| a.help("Exposure of the previews, the contact sheet and the report page, in stops")))]
     Compare(CompareArgs),
     /// MSE and relMSE of IMAGE against REFERENCE (EXR files of the same size).
     Diff {
@@ -91,6 +101,10 @@ enum Command {
     /// OUT-DIR/view-SAMPLER-Nspp.exr, R puts the camera back, Esc or Q closes. Mouse: drag
     /// to orbit, right-drag (or shift-drag) to pan, wheel to dolly. The image at N spp is
     /// the one `myriad render --spp N` makes with the same seed. Needs a display (X11).
+    #[command(mut_arg("spp", |a| a.help("Stop refining at this many samples per pixel [default: no limit]")))]
+    #[command(mut_arg("time", |a| a.help("Stop refining after this many seconds [default: no limit]")))]
+    #[command(mut_arg("exposure", |a| a.help("Starting exposure, in stops (+ and - change it in the window)")))]
+    #[command(mut_arg("quiet", |a| a.help("Print nothing on stderr while the window is open")))]
     View(ViewArgs),
     /// Load a scene and report what it holds: triangles, lights, power, build times, memory.
     Info {
@@ -162,10 +176,10 @@ struct SlurmArgs {
     /// Scene file (.ron, .obj, .gltf or .glb).
     scene: PathBuf,
     /// Samples per pixel of the whole render.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_count, allow_negative_numbers = true)]
     spp: u32,
     /// Array tasks: the samples are cut into this many ranges (not for --compare).
-    #[arg(long, required_unless_present = "compare")]
+    #[arg(long, required_unless_present = "compare", value_parser = parse_count, allow_negative_numbers = true)]
     tasks: Option<u32>,
     /// Job folder (default: slurm-<scene name>).
     #[arg(long)]
@@ -180,7 +194,7 @@ struct SlurmArgs {
     #[arg(long)]
     time: Option<String>,
     /// sbatch --cpus-per-task; each task renders with that many threads.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_count, allow_negative_numbers = true)]
     cpus_per_task: Option<u32>,
     /// sbatch --mem per task (e.g. 4G).
     #[arg(long)]
@@ -189,10 +203,10 @@ struct SlurmArgs {
     #[arg(long, value_parser = sampler_parser())]
     sampler: Option<LightSamplerKind>,
     /// Random seed.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_seed, allow_negative_numbers = true)]
     seed: Option<u64>,
     /// Maximum scattering events.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_count, allow_negative_numbers = true)]
     max_depth: Option<u32>,
     /// Output size, e.g. 640x480.
     #[arg(long, value_parser = parse_resolution)]
@@ -209,13 +223,13 @@ struct SlurmArgs {
     #[arg(long, value_parser = sampler_parser(), value_delimiter = ',', conflicts_with = "aov")]
     compare: Option<Vec<LightSamplerKind>>,
     /// Seeds per sampler of a comparison (the runs use the seeds after --seed).
-    #[arg(long, default_value_t = 1, requires = "compare")]
+    #[arg(long, default_value_t = 1, requires = "compare", value_parser = parse_count, allow_negative_numbers = true)]
     seeds: u32,
     /// Reference EXR of a comparison (default: a task renders one).
     #[arg(long, requires = "compare")]
     reference: Option<PathBuf>,
     /// spp of a comparison's rendered reference.
-    #[arg(long, default_value_t = 1024, requires = "compare")]
+    #[arg(long, default_value_t = 1024, requires = "compare", value_parser = parse_count, allow_negative_numbers = true)]
     reference_spp: u32,
     /// Sampler of a comparison's rendered reference.
     #[arg(long, value_parser = sampler_parser(), default_value = "tree", requires = "compare")]
@@ -275,17 +289,17 @@ struct CompareArgs {
     reference: Option<PathBuf>,
     /// spp of the rendered reference [default: 16 × each run's spp, or 16 × its time with
     /// --time, at most 10 minutes; a timing pass estimates it first].
-    #[arg(long, conflicts_with = "reference_time")]
+    #[arg(long, conflicts_with = "reference_time", value_parser = parse_count, allow_negative_numbers = true)]
     reference_spp: Option<u32>,
     /// Seconds (whole passes) of the rendered reference, instead of an spp.
-    #[arg(long, value_parser = parse_seconds)]
+    #[arg(long, value_parser = parse_seconds, allow_negative_numbers = true)]
     reference_time: Option<Duration>,
     /// Sampler of the rendered reference [default: tree, the unbiased sampler that converges
     /// fastest; all and local cost O(n) per point].
     #[arg(long, value_parser = sampler_parser())]
     reference_sampler: Option<LightSamplerKind>,
     /// Seeds per sampler: metrics become mean ± standard deviation, and the bias check gains power.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = parse_count, allow_negative_numbers = true)]
     seeds: u32,
     /// Output folder (default: compare-<scene name>).
     #[arg(long)]
@@ -307,22 +321,21 @@ struct CompareArgs {
 /// `render` block, then the defaults.
 #[derive(Args)]
 struct CommonArgs {
-    /// Samples per pixel [default: 64; compare: 16 for every sampler; view: no limit].
-    #[arg(long, conflicts_with = "time")]
+    /// Samples per pixel.
+    #[arg(long, conflicts_with = "time", value_parser = parse_count, allow_negative_numbers = true)]
     spp: Option<u32>,
-    /// Render for this many seconds (whole passes) instead of a fixed spp (compare: every
-    /// sampler, per seed; view: stop refining after this long).
-    #[arg(long, value_parser = parse_seconds)]
+    /// Seconds to render (whole passes) instead of a fixed spp.
+    #[arg(long, value_parser = parse_seconds, allow_negative_numbers = true)]
     time: Option<Duration>,
-    /// Random seed: the same seed gives the same image, whatever --threads is (compare: the
-    /// runs use the K seeds after it).
-    #[arg(long)]
+    /// Random seed: the same seed gives the same image, whatever --threads is.
+    #[arg(long, value_parser = parse_seed, allow_negative_numbers = true)]
     seed: Option<u64>,
     /// Output size, e.g. 640x480 (the camera's vertical field of view is kept).
     #[arg(long, value_parser = parse_resolution)]
     resolution: Option<UVec2>,
-    /// Maximum number of bounces (scattering events); 1 is direct lighting only [default: 8].
-    #[arg(long, conflicts_with = "direct_only")]
+    /// Maximum number of bounces (scattering events); 1 is direct lighting only [default: the
+    /// scene's, else 8].
+    #[arg(long, conflicts_with = "direct_only", value_parser = parse_count, allow_negative_numbers = true)]
     max_depth: Option<u32>,
     /// Direct lighting only (same as --max-depth 1): isolates the light sampler's noise.
     #[arg(long)]
@@ -331,10 +344,10 @@ struct CommonArgs {
     /// from the front (for OBJ files, which carry no camera).
     #[arg(long)]
     camera: Option<String>,
-    /// Exposure of the PNG previews, in stops (view: the starting exposure).
+    /// Exposure of the PNG preview, in stops.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_exposure)]
     exposure: f32,
-    /// Hide the progress bars (view: the lines on stderr).
+    /// Hide the progress bars.
     #[arg(long, short)]
     quiet: bool,
     #[command(flatten)]
@@ -360,12 +373,12 @@ impl CommonArgs {
 #[derive(Args)]
 struct LoadArgs {
     /// glTF scene to load, by index (default: the file's default scene, else its first).
-    #[arg(long)]
+    #[arg(long, value_parser = parse_index, allow_negative_numbers = true)]
     gltf_scene: Option<usize>,
     /// Factor from glTF punctual light units (cd, lux) to W/sr and W/m² [default: 1/683, as
     /// Blender's exporter writes them in its "Standard" lighting mode; use 1 for files whose
     /// intensities are already radiometric].
-    #[arg(long)]
+    #[arg(long, value_parser = parse_scale, allow_negative_numbers = true)]
     punctual_scale: Option<f32>,
 }
 
@@ -385,7 +398,7 @@ fn sampler_parser() -> impl TypedValueParser<Value = LightSamplerKind> {
 fn parse_seconds(s: &str) -> Result<Duration, String> {
     let v: f64 = s.parse().map_err(|_| format!("'{s}' is not a number of seconds"))?;
     if !(v > 0.0) {
-        return Err("the time must be positive".into());
+        return Err(format!("{s} is not allowed: the time must be a positive number of seconds"));
     }
     Duration::try_from_secs_f64(v).map_err(|_| format!("{s} seconds is longer than myriad can count"))
 }
@@ -411,6 +424,38 @@ fn parse_samples(s: &str) -> Result<(u32, u32), String> {
     Ok((a, b))
 }
 
+/// A count (spp, seeds, tasks, depth): a whole number from 1 up. Options that take one accept
+/// hyphen values, so that `--spp -5` reaches here and is told what is wrong with it.
+fn parse_count(s: &str) -> Result<u32, String> {
+    match s.trim().parse::<i128>() {
+        Ok(n) if (1..=u32::MAX as i128).contains(&n) => Ok(n as u32),
+        Ok(n) if n < 1 => Err(format!("{n} is not allowed: give a positive whole number (1, 2, 3, ...)")),
+        Ok(_) => Err(format!("{s} is more than myriad can count: at most {}", u32::MAX)),
+        Err(_) => Err(format!("'{s}' is not a whole number")),
+    }
+}
+
+/// A seed: a whole number from 0 to 2⁶⁴ − 1.
+fn parse_seed(s: &str) -> Result<u64, String> {
+    match s.trim().parse::<i128>() {
+        Ok(n) if (0..=u64::MAX as i128).contains(&n) => Ok(n as u64),
+        _ => Err(format!("'{s}' is not a seed: give a whole number from 0 to {}", u64::MAX)),
+    }
+}
+
+/// An index into a file's list (a glTF scene): a whole number from 0.
+fn parse_index(s: &str) -> Result<usize, String> {
+    s.trim().parse::<usize>().map_err(|_| format!("'{s}' is not an index: give a whole number from 0"))
+}
+
+/// A positive, finite factor.
+fn parse_scale(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("'{s}' is not a positive number")),
+    }
+}
+
 fn parse_exposure(s: &str) -> Result<f32, String> {
     let v: f32 = s.parse().map_err(|_| format!("'{s}' is not a number of stops"))?;
     if v.is_finite() && v.abs() <= 64.0 { Ok(v) } else { Err("the exposure must be between -64 and 64 stops".into()) }
@@ -425,7 +470,10 @@ fn parse_gigabytes(s: &str) -> Result<u64, String> {
 fn run(cli: Cli) -> myriad::Result<ExitCode> {
     if let Some(bytes) = cli.max_memory {
         myriad::limits::set_memory_limit(bytes);
+    } else {
+        myriad::limits::check_memory_env().map_err(myriad::Error::Usage)?;
     }
+    myriad::io::replace_read_only(cli.force);
     if let Some(n) = cli.threads {
         rayon::ThreadPoolBuilder::new()
             .num_threads(n as usize)
@@ -442,10 +490,10 @@ fn run(cli: Cli) -> myriad::Result<ExitCode> {
             });
             let compare = a.compare.clone().map(|samplers| commands::slurm::CompareJob {
                 samplers,
-                seeds: a.seeds.max(1),
+                seeds: a.seeds,
                 seed: a.seed.unwrap_or(0),
                 reference: a.reference.clone(),
-                reference_spp: a.reference_spp.max(1),
+                reference_spp: a.reference_spp,
                 reference_sampler: a.reference_sampler,
             });
             say(commands::slurm::slurm(&commands::slurm::SlurmOptions {
@@ -529,7 +577,7 @@ fn compare(a: CompareArgs) -> myriad::Result<()> {
         reference_spp: a.reference_spp,
         reference_time: a.reference_time,
         reference_sampler: a.reference_sampler,
-        seeds: a.seeds.max(1),
+        seeds: a.seeds,
         out_dir: out_dir.clone(),
         resolution: a.common.resolution,
         camera: a.common.camera,

@@ -36,8 +36,13 @@
 
   // What is shown: which image, how, and where.
   const state = { index: 0, mode: "render", exposure: data.exposure, scale: 1, x: 0, y: 0 };
-  const fit = Math.min(view.clientWidth / W, view.clientHeight / H);
-  if (fit < 1) state.scale = Math.pow(2, Math.floor(Math.log2(fit)));
+  // The image as large as the view holds it, centred (key f); key 0 shows it at 1:1.
+  function fitView() {
+    state.scale = Math.min(view.clientWidth / W, view.clientHeight / H);
+    state.x = (view.clientWidth - W * state.scale) / 2;
+    state.y = (view.clientHeight - H * state.scale) / 2;
+  }
+  fitView();
 
   // The PNG previews' tonemap: exposure, clamp, sRGB curve, 8 bits.
   function srgb8(v) {
@@ -174,19 +179,20 @@
     else if (k === "+" || k === "=") { state.exposure += 0.5; paint(); }
     else if (k === "-") { state.exposure -= 0.5; paint(); }
     else if (k === "0") { state.scale = 1; state.x = 0; state.y = 0; place(); }
+    else if (k === "f") { fitView(); place(); }
     else return;
     ev.preventDefault();
   });
   document.getElementById("help").textContent =
     "keys: ←/→ or space flip, 1–9 pick an image, r render, e relative error (against " + images[0].name +
-    "), d |difference|, +/− exposure, 0 actual size; wheel zooms, drag pans.";
+    "), d |difference|, +/− exposure, f fit to the view, 0 actual size; wheel zooms, drag pans.";
 
   // The metrics table, sortable by any column.
   const metrics = document.getElementById("metrics");
   function table(sortBy, descending) {
     const t = data.table, rows = t.rows.slice();
     if (sortBy !== undefined) {
-      const key = (row) => { const v = parseFloat(row[sortBy]); return Number.isNaN(v) ? row[sortBy] : v; };
+      const key = (row) => { const v = parseFloat(row[sortBy].text); return Number.isNaN(v) ? row[sortBy].text : v; };
       rows.sort((a, b) => { const x = key(a), y = key(b); const o = x < y ? -1 : x > y ? 1 : 0; return descending ? -o : o; });
     }
     const el = document.createElement("table");
@@ -197,7 +203,17 @@
       th.onclick = () => table(i, i === sortBy ? !descending : false);
       head.appendChild(th);
     });
-    rows.forEach((r) => { const tr = el.insertRow(); r.forEach((c) => { tr.insertCell().textContent = c; }); });
+    rows.forEach((r) => {
+      const tr = el.insertRow();
+      r.forEach((c) => {
+        const td = tr.insertCell();
+        td.textContent = c.text;
+        if (c.mark) {
+          td.className = "marked";
+          td.append(" ", Object.assign(document.createElement("mark"), { textContent: c.mark }));
+        }
+      });
+    });
     metrics.replaceChildren(el);
   }
   if (data.table.columns.length) table();

@@ -7,7 +7,7 @@ use super::file_name;
 use crate::compare::html::{self, Page, PageImage};
 use crate::compare::images::error_picture;
 use crate::compare::metrics::{ErrorMetrics, error_metrics, relative_error_map};
-use crate::compare::report::{Table, num};
+use crate::compare::report::{Cell, Table, num};
 use crate::error::{Error, Result};
 use crate::math::Rgb;
 
@@ -75,7 +75,7 @@ fn page(opts: &DiffOptions, report: &DiffReport, image: &[Rgb], reference: &[Rgb
     let (image_name, reference_name) = (file_name(&opts.image), file_name(&opts.reference));
     let table = Table {
         columns: ["image", "MSE", "relMSE"].map(String::from).to_vec(),
-        rows: vec![vec![image_name.clone(), num(report.metrics.mse), num(report.metrics.rel_mse)]],
+        rows: vec![[image_name.clone(), num(report.metrics.mse), num(report.metrics.rel_mse)].map(Cell::from).to_vec()],
     };
     html::page(&Page {
         title: format!("myriad diff: {image_name} against {reference_name}"),

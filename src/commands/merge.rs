@@ -46,6 +46,7 @@ pub struct MergeReport {
 /// Reads, checks and merges the parts, and writes the image.
 pub fn merge(opts: &MergeOptions) -> Result<MergeReport> {
     let png = opts.png.then(|| preview_path(&opts.output));
+    crate::io::exr::check_name(&opts.output)?;
     crate::io::check_writable(&opts.output)?;
     if let Some(p) = &png {
         crate::io::check_writable(p)?;

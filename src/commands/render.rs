@@ -52,8 +52,10 @@ pub struct RenderOptions {
 pub struct RenderReport {
     /// The scene and its load timings.
     pub loaded: LoadedScene,
-    /// The sampler used.
+    /// The sampler asked for.
     pub sampler: LightSamplerKind,
+    /// What chose the lights ([`LightStrategy::label`]).
+    pub label: String,
     /// Its build time.
     pub sampler_build_time: Duration,
     /// Its memory.
@@ -89,7 +91,7 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
 
     let _busy = crate::interrupt::busy();
     if opts.progress {
-        announce(&settings, sampler);
+        announce(&settings, &strategy.label(sampler));
     }
     let scene_name = opts.scene.as_deref().map_or(DEFAULT_SCENE_NAME.to_string(), |p| p.display().to_string());
     let display =
@@ -105,6 +107,7 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
     Ok(RenderReport {
         loaded,
         sampler,
+        label: strategy.label(sampler),
         sampler_build_time,
         sampler_bytes: strategy.memory_bytes(),
         tree: strategy.tree_stats(),
@@ -117,7 +120,7 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
 
 /// Says on stderr what is about to render (beside the progress bar; a closed stderr does not
 /// stop the render).
-fn announce(settings: &RenderSettings, sampler: LightSamplerKind) {
+fn announce(settings: &RenderSettings, sampler: &str) {
     let res = settings.resolution;
     let budget = match settings.budget {
         Budget::Spp(n) => format!("{n} spp"),
@@ -206,14 +209,7 @@ impl Outputs {
 
 /// The EXR output is not a picture format's name and not the preview's path.
 fn check_outputs(exr: &Path, png: Option<&Path>) -> Result<()> {
-    let ext = exr.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    if let Some(ext @ ("png" | "jpg" | "jpeg")) = ext.as_deref() {
-        return Err(Error::Usage(format!(
-            "-o {} would write an EXR image under a .{ext} name; give -o a .exr path (the PNG preview \
-             goes beside it, or where --png says)",
-            exr.display()
-        )));
-    }
+    crate::io::exr::check_name(exr)?;
     let same = |a: &Path, b: &Path| std::path::absolute(a).ok() == std::path::absolute(b).ok();
     if let Some(png) = png.filter(|p| same(p, exr)) {
         return Err(Error::Usage(format!(
@@ -245,11 +241,11 @@ impl fmt::Display for RenderReport {
         )?;
         writeln!(
             f,
-            "prepare    load {}, build {} (BVH {}), {} sampler {} ({})",
+            "prepare    load {}, build {} (BVH {}), sampler {} built in {} ({})",
             human_duration(self.loaded.load_time),
             human_duration(r.stats.build_time),
             human_duration(r.stats.bvh_build_time),
-            self.sampler,
+            self.label,
             human_duration(self.sampler_build_time),
             human_bytes(self.sampler_bytes as u64)
         )?;
@@ -273,7 +269,7 @@ impl fmt::Display for RenderReport {
             st.rays.rays,
             st.rays.shadow_rays
         )?;
-        if self.sampler == LightSamplerKind::Cells && self.cells.is_none() {
+        if self.sampler == LightSamplerKind::Cells && self.cells.is_none() && !s.lights.is_empty() {
             let lights = self.loaded.scene.lights.len();
             let chose = if lights <= crate::light_sampler::EVERY_LIGHT_UP_TO {
                 "every light was sampled at diffuse points, the tree chose one elsewhere"

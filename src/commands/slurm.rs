@@ -130,7 +130,7 @@ pub fn slurm(opts: &SlurmOptions) -> Result<SlurmReport> {
     };
     let (tasks, last, result) = match &opts.compare {
         None => image_tasks(opts, &out, &render, &exe, &stem)?,
-        Some(job) => compare_tasks(opts, job, &out, &render, &exe, &scene),
+        Some(job) => compare_tasks(opts, job, &out, &render, &exe, &scene)?,
     };
     for dir in [out.clone(), out.join("parts"), out.join("runs"), out.join("logs")] {
         crate::io::ensure_dir(&dir)?;
@@ -157,6 +157,7 @@ fn image_tasks(
             opts.tasks, opts.spp, opts.spp
         )));
     }
+    crate::limits::check_runs(opts.tasks as u64, format_args!("--tasks {}", opts.tasks)).map_err(Error::Usage)?;
     let text = |p: &Path| p.to_string_lossy().into_owned();
     let parts: Vec<PathBuf> = (0..opts.tasks).map(|i| out.join("parts").join(format!("part-{i}.part"))).collect();
     let tasks = ranges(opts.spp, opts.tasks)
@@ -219,7 +220,13 @@ fn compare_tasks(
     render: &dyn Fn(Vec<String>) -> Vec<String>,
     exe: &Path,
     scene: &Path,
-) -> (Vec<Task>, Vec<String>, PathBuf) {
+) -> Result<(Vec<Task>, Vec<String>, PathBuf)> {
+    let count = job.samplers.len() as u64 * job.seeds as u64 + job.reference.is_none() as u64;
+    let what = format_args!("{} sampler(s) × --seeds {} and a reference", job.samplers.len(), job.seeds);
+    crate::limits::check_runs(count, what).map_err(Error::Usage)?;
+    if opts.spp == 0 || job.seeds == 0 {
+        return Err(Error::Usage("--spp and --seeds must be at least 1".into()));
+    }
     let text = |p: &Path| p.to_string_lossy().into_owned();
     let (runs, report) = (out.join("runs"), out.join("report"));
     let mut tasks = Vec::new();
@@ -258,7 +265,7 @@ fn compare_tasks(
         "--quiet",
     ]));
     cmd.extend(opts.render_args.iter().cloned());
-    (tasks, cmd, report)
+    Ok((tasks, cmd, report))
 }
 
 /// Owned words of a command line.

@@ -59,6 +59,13 @@ pub fn preview_picture(size: UVec2, pixels: &[Rgb], stops: f32) -> Picture {
     Picture { size, bytes: to_srgb8(pixels, stops) }
 }
 
+/// The advance of one character of the bundled monospaced font `px` pixels high.
+pub fn text_advance(px: f32) -> f32 {
+    let font = FontRef::try_from_slice(FONT).expect("the bundled font parses");
+    let scaled = font.as_scaled(PxScale::from(px));
+    scaled.h_advance(scaled.glyph_id('M'))
+}
+
 /// A canvas to compose pictures and text on (the contact sheet, the viewer's status bar).
 pub struct Canvas {
     pic: Picture,

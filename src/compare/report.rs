@@ -49,6 +49,9 @@ pub struct RunResult {
 pub struct SamplerResult {
     /// Sampler name.
     pub sampler: String,
+    /// What chose the lights: the sampler's name, or it and what stood in for it
+    /// (`cells (as tree)` over 9 229 lights).
+    pub label: String,
     /// Light-sampler build seconds.
     pub build_seconds: f64,
     /// Light-sampler memory in bytes.
@@ -143,7 +146,34 @@ pub struct Table {
     /// Column titles.
     pub columns: Vec<String>,
     /// Each row's cells.
-    pub rows: Vec<Vec<String>>,
+    pub rows: Vec<Vec<Cell>>,
+}
+
+/// One cell of a [`Table`]: its text, and a mark where the number needs a second look (the
+/// bias check's flag), which Markdown shows in bold and the HTML page as a highlight.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Cell {
+    /// What the cell shows.
+    pub text: String,
+    /// A short note that marks it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mark: Option<String>,
+}
+
+impl From<String> for Cell {
+    fn from(text: String) -> Self {
+        Self { text, mark: None }
+    }
+}
+
+impl Cell {
+    /// The cell in Markdown: its text, and its mark in bold.
+    pub fn markdown(&self) -> String {
+        match &self.mark {
+            Some(m) => format!("{} **{m}**", self.text),
+            None => self.text.clone(),
+        }
+    }
 }
 
 /// Formats a number with 4 significant digits (scientific below 1e-3).
@@ -189,8 +219,9 @@ impl CompareReport {
             .samplers
             .iter()
             .map(|s| {
-                vec![
-                    s.sampler.clone(),
+                let bias = Cell { text: num(s.bias.z), mark: s.bias.flagged.then(|| "biased?".to_string()) };
+                let cells = vec![
+                    s.label.clone(),
                     pm(&s.spp, seeds),
                     pm(&s.seconds, seeds),
                     pm(&s.mse, seeds),
@@ -201,8 +232,8 @@ impl CompareReport {
                     num(s.efficiency_trimmed),
                     num(s.build_seconds),
                     s.memory_bytes.to_string(),
-                    format!("{}{}", num(s.bias.z), if s.bias.flagged { " **biased?**" } else { "" }),
-                ]
+                ];
+                cells.into_iter().map(Cell::from).chain([bias]).collect()
             })
             .collect();
         Table { columns: columns.map(String::from).to_vec(), rows }
@@ -213,7 +244,7 @@ impl CompareReport {
         let t = self.metrics();
         let mut md = format!("| {} |\n|---|{}\n", t.columns.join(" | "), "---:|".repeat(t.columns.len() - 1));
         for row in &t.rows {
-            md += &format!("| {} |\n", row.join(" | "));
+            md += &format!("| {} |\n", row.iter().map(Cell::markdown).collect::<Vec<_>>().join(" | "));
         }
         md
     }
@@ -253,6 +284,15 @@ impl CompareReport {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_mark_is_bold_in_markdown_and_its_own_field_for_the_page() {
+        let flagged = Cell { text: "3.878".into(), mark: Some("biased?".into()) };
+        assert_eq!(flagged.markdown(), "3.878 **biased?**");
+        let json = serde_json::to_string(&flagged).unwrap();
+        assert_eq!(json, r#"{"text":"3.878","mark":"biased?"}"#);
+        assert_eq!(serde_json::to_string(&Cell::from("1.5".to_string())).unwrap(), r#"{"text":"1.5"}"#);
+    }
 
     #[test]
     fn numbers_keep_four_significant_digits() {

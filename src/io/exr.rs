@@ -35,9 +35,33 @@ pub fn write(path: &Path, layers: &Layers, metadata: &[(String, String)]) -> Res
     })
 }
 
+/// An EXR output's path does not name another picture format (an EXR under a `.png` name
+/// would open nowhere).
+pub fn check_name(path: &Path) -> Result<()> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    if let Some(ext @ ("png" | "jpg" | "jpeg" | "hdr" | "tif" | "tiff" | "webp")) = ext.as_deref() {
+        return Err(Error::Usage(format!(
+            "-o {} would write an EXR image under a .{ext} name; give -o a .exr path (a PNG preview goes \
+             beside it)",
+            path.display()
+        )));
+    }
+    Ok(())
+}
+
+/// What went wrong reading `path`: a file that cannot be opened says why; one that opens but
+/// does not parse, or ends early (the exr crate reports a truncated or corrupt file as an I/O
+/// error too), is named as damaged.
 fn read_error(path: &Path, e: exr::error::Error) -> Error {
+    use std::io::ErrorKind::{NotFound, PermissionDenied};
     match e {
-        exr::error::Error::Io(io) => Error::io(path, io),
+        exr::error::Error::Io(io) if matches!(io.kind(), NotFound | PermissionDenied) || path.is_dir() => {
+            Error::io(path, io)
+        }
+        exr::error::Error::Io(io) => Error::Input {
+            path: path.into(),
+            message: format!("is damaged: not a complete EXR image ({io}); render or copy it again"),
+        },
         other => Error::Input { path: path.into(), message: format!("not a readable EXR image: {other}") },
     }
 }

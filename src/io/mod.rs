@@ -15,6 +15,7 @@ pub mod png;
 pub mod ron;
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::error::{Error, Result};
 use crate::scene::SceneDescription;
@@ -64,12 +65,36 @@ fn temp_path(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{name}.myriad-tmp-{}", std::process::id()))
 }
 
+/// Whether outputs may replace read-only files (`--force`).
+static REPLACE_READ_ONLY: AtomicBool = AtomicBool::new(false);
+
+/// Lets outputs replace read-only files for the rest of the process (`--force`), or not.
+pub fn replace_read_only(yes: bool) {
+    REPLACE_READ_ONLY.store(yes, Ordering::Relaxed);
+}
+
+/// An error when `path` is an existing read-only file and `--force` was not given: someone
+/// made it read-only to keep it, so it is not replaced behind their back (a rename would).
+fn check_not_read_only(path: &Path) -> Result<()> {
+    let read_only = std::fs::metadata(path).is_ok_and(|m| m.is_file() && m.permissions().readonly());
+    if read_only && !REPLACE_READ_ONLY.load(Ordering::Relaxed) {
+        return Err(Error::Output {
+            path: path.into(),
+            message: "exists and is read-only; myriad does not replace it: make it writable (chmod u+w), write \
+                      elsewhere, or pass --force"
+                .into(),
+        });
+    }
+    Ok(())
+}
+
 /// Checks, before a long render, that `path` can be written: its folder exists and accepts a
-/// new file. Nothing is left behind.
+/// new file, and it is not a read-only file. Nothing is left behind.
 pub fn check_writable(path: &Path) -> Result<()> {
     if path.is_dir() {
         return Err(Error::Output { path: path.into(), message: "is a directory; give a file name".into() });
     }
+    check_not_read_only(path)?;
     let tmp = temp_path(path);
     std::fs::File::create(&tmp)
         .map_err(|e| Error::Output { path: path.into(), message: format!("cannot be written: {e}") })?;
@@ -78,9 +103,11 @@ pub fn check_writable(path: &Path) -> Result<()> {
 }
 
 /// Writes `path` whole or not at all: `write` fills a temporary file beside it, which then
-/// replaces `path` by a rename. On any error, or when the user has asked to stop at once
-/// ([`crate::interrupt`]), the temporary file is removed and `path` is left as it was.
+/// replaces `path` by a rename; a read-only `path` is refused unless `--force`. On any
+/// error, or when the user has asked to stop at once ([`crate::interrupt`]), the temporary
+/// file is removed and `path` is left as it was.
 pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    check_not_read_only(path)?;
     let tmp = temp_path(path);
     let _busy = crate::interrupt::busy();
     let result = write(&tmp).and_then(|()| {

@@ -124,6 +124,46 @@ fn normalise_mtl(text: &str, file: &str) -> Result<String> {
     Ok(out)
 }
 
+/// The first face of an OBJ text that refers to a vertex, texture coordinate or normal not
+/// defined before it (tobj says only that one does): its line number and what is wrong.
+/// Indices count from 1; negative ones count back from the last defined.
+fn face_out_of_range(text: &str) -> Option<(usize, String)> {
+    let mut defined = [0i64; 3];
+    for (i, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => defined[0] += 1,
+            Some("vt") => defined[1] += 1,
+            Some("vn") => defined[2] += 1,
+            Some("f") => {
+                for corner in words {
+                    for (k, index) in corner.split('/').enumerate().take(3) {
+                        let Ok(n) = index.parse::<i64>() else { continue };
+                        let (kind, kinds) = [
+                            ("vertex", "vertices"),
+                            ("texture coordinate", "texture coordinates"),
+                            ("normal", "normals"),
+                        ][k];
+                        let count = defined[k];
+                        if n == 0 || n > count || n < -count {
+                            return Some((
+                                i + 1,
+                                format!(
+                                    "face '{}' uses {kind} {n}, but {count} {kinds} are defined before it \
+                                     (indices count from 1, or back from -1)",
+                                    line.trim()
+                                ),
+                            ));
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
 /// Loads the meshes, materials and textures of an `.obj` file.
 pub fn load_meshes(path: &Path) -> Result<LoadedMeshes> {
     let file = path.display().to_string();
@@ -143,8 +183,12 @@ pub fn load_meshes(path: &Path) -> Result<LoadedMeshes> {
         })?;
         tobj::load_mtl_buf(&mut text.as_bytes())
     };
-    let (models, materials) = tobj::load_obj_buf(&mut text.as_bytes(), &tobj::GPU_LOAD_OPTIONS, load_mtl)
-        .map_err(|e| Error::scene(&file, "file", format!("not a readable OBJ file: {e}")))?;
+    let (models, materials) = tobj::load_obj_buf(&mut text.as_bytes(), &tobj::GPU_LOAD_OPTIONS, load_mtl).map_err(
+        |e| match face_out_of_range(&text) {
+            Some((line, message)) => Error::scene(&file, format!("line {line}"), message),
+            None => Error::scene(&file, "file", format!("not a readable OBJ file: {e}")),
+        },
+    )?;
     if let Some(e) = mtl_error.into_inner() {
         return Err(e);
     }
@@ -196,4 +240,20 @@ pub fn load_scene(path: &Path) -> Result<SceneDescription> {
         desc.meshes.push(mesh);
     }
     Ok(desc)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_face_past_the_vertices_defined_is_found_by_its_line() {
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1 2 3\n\nf 1/1 2/1 3/2\n";
+        let (line, message) = face_out_of_range(text).unwrap();
+        assert_eq!(line, 7);
+        assert!(message.contains("texture coordinate 2") && message.contains("1 texture coordinates"), "{message}");
+        assert_eq!(face_out_of_range("v 0 0 0\nf -1 -1 -2\n").unwrap().0, 2);
+        assert_eq!(face_out_of_range("v 0 0 0\nf 0 1 1\n").unwrap().0, 2);
+        assert!(face_out_of_range("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n").is_none());
+    }
 }

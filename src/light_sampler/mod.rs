@@ -134,6 +134,18 @@ pub fn prefetch<T>(items: &[T], index: usize) {
 }
 
 impl AnyLightSampler {
+    /// Which sampler this is.
+    pub fn kind(&self) -> LightSamplerKind {
+        match self {
+            AnyLightSampler::Uniform(_) => LightSamplerKind::Uniform,
+            AnyLightSampler::Power(_) => LightSamplerKind::Power,
+            AnyLightSampler::Local(_) => LightSamplerKind::Local,
+            AnyLightSampler::Tree(_) => LightSamplerKind::Tree,
+            AnyLightSampler::Learned(_) => LightSamplerKind::Learned,
+            AnyLightSampler::Cells(_) => LightSamplerKind::Cells,
+        }
+    }
+
     /// [`LightSampler::sample`], fetching the candidate lights from `lights` while the tree
     /// chooses among them (the other samplers choose without looking at any light).
     #[inline]
@@ -239,6 +251,21 @@ impl LightStrategy {
         }
     }
 
+    /// What chooses the lights, in words, for a strategy built as `kind`: the kind's name
+    /// where it is what chooses, else the kind and what chooses in its place
+    /// (`cells (as tree)` over 9 229 lights), so that no summary, status bar or report calls
+    /// a render by a sampler it did not use.
+    pub fn label(&self, kind: LightSamplerKind) -> String {
+        let chooser = match self {
+            // Every strategy over no lights is `All`.
+            LightStrategy::All if kind != LightSamplerKind::All => return format!("{kind} (no lights)"),
+            LightStrategy::All => LightSamplerKind::All.name().to_string(),
+            LightStrategy::One(s) => s.kind().name().to_string(),
+            LightStrategy::EveryAtDiffuse(s) => format!("every light at diffuse points, {} elsewhere", s.kind()),
+        };
+        if chooser == kind.name() { chooser } else { format!("{kind} (as {chooser})") }
+    }
+
     /// The sampler that chooses one light where not every light is taken.
     #[inline]
     pub fn sampler(&self) -> Option<&AnyLightSampler> {
@@ -299,6 +326,20 @@ mod tests {
     use super::*;
     use crate::light::PointLight;
     use crate::math::Rgb;
+
+    #[test]
+    fn a_strategy_is_labelled_by_what_actually_chooses() {
+        let lights: Vec<Light> = (0..2000)
+            .map(|i| Light::Point(PointLight { position: Vec3A::new(i as f32, 2.0, 0.0), intensity: Rgb::ONE }))
+            .collect();
+        let label = |kind, n: usize| LightStrategy::build(kind, &lights[..n], Vec3A::ZERO, 10.0).label(kind);
+        assert_eq!(label(LightSamplerKind::Cells, 100), "cells");
+        assert_eq!(label(LightSamplerKind::Cells, 2000), "cells (as tree)");
+        assert_eq!(label(LightSamplerKind::Cells, 3), "cells (as every light at diffuse points, tree elsewhere)");
+        assert_eq!(label(LightSamplerKind::Tree, 3), "tree");
+        assert_eq!(label(LightSamplerKind::All, 3), "all");
+        assert_eq!(label(LightSamplerKind::Cells, 0), "cells (no lights)");
+    }
 
     #[test]
     fn the_default_takes_every_light_at_diffuse_points_up_to_one_nodes_worth() {

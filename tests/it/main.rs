@@ -11,6 +11,7 @@ mod formats;
 mod light_points;
 mod light_samplers;
 mod mutation;
+mod new_user;
 mod render;
 mod report_page;
 mod scene_loading;

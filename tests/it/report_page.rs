@@ -182,10 +182,22 @@ fn the_report_page_shows_the_renders_flips_on_a_key_and_reads_pixel_values() {
     }
     assert!(browser.errors().is_empty(), "console errors: {:?}", browser.errors());
 
-    let rect =
-        browser.eval("(() => { const r = canvas.getBoundingClientRect(); return [r.x, r.y, r.width, r.height]; })()");
-    let [x, y, w, h] = [0, 1, 2, 3].map(|i| rect[i].as_f64().unwrap());
-    assert_eq!((w, h), (48.0, 36.0), "1:1 zoom at first");
+    let rect = |b: &mut Browser, id: &str| -> [f64; 4] {
+        let r = b.eval(&format!(
+            "(() => {{ const r = {id}.getBoundingClientRect(); return [r.x, r.y, r.width, r.height]; }})()"
+        ));
+        [0, 1, 2, 3].map(|i| r[i].as_f64().unwrap())
+    };
+    // At first the image fills the view (a small render is not lost in a large canvas),
+    // keeping its aspect and centred; 0 shows it at 1:1, f fits it again.
+    let [vx, vy, vw, vh] = rect(&mut browser, "view");
+    let [fx, fy, fw, fh] = rect(&mut browser, "canvas");
+    assert!((fw - vw).abs() < 1.0 || (fh - vh).abs() < 1.0, "fits the view: {fw} × {fh} in {vw} × {vh}");
+    assert!(fw <= vw + 0.5 && fh <= vh + 0.5 && (fw / fh - 48.0 / 36.0).abs() < 0.01, "{fw} × {fh}");
+    assert!(((fx - vx) - (vx + vw - fx - fw)).abs() < 1.0 && ((fy - vy) - (vy + vh - fy - fh)).abs() < 1.0);
+    browser.key("0", 48);
+    let [x, y, w, h] = rect(&mut browser, "canvas");
+    assert_eq!((w, h), (48.0, 36.0), "1:1 on the 0 key");
     let (reference, _) = preview(&d.join("out/reference.exr"));
     let shot = browser.screenshot(x, y, 48, 36);
     shows(&shot, &reference, "the reference");
@@ -230,6 +242,11 @@ fn the_report_page_shows_the_renders_flips_on_a_key_and_reads_pixel_values() {
     let down = column(&mut browser);
     assert!(up.len() == 2 && up[0] <= up[1] && down[0] >= down[1], "{up:?} {down:?}");
     assert!(browser.eval("document.querySelector('#plot svg') !== null") == json!(true), "the convergence plot");
+    browser.key("f", 70);
+    assert_eq!(rect(&mut browser, "canvas"), [fx, fy, fw, fh], "f fits the view again");
+    // Cells are plain numbers; a flag is a mark of its own, never Markdown.
+    let texts = browser.eval("Array.from(document.querySelectorAll('#metrics td'), c => c.textContent).join('|')");
+    assert!(!texts.as_str().unwrap().contains("**"), "{texts}");
     assert!(browser.errors().is_empty(), "console errors: {:?}", browser.errors());
 }
 

@@ -102,6 +102,8 @@ impl Plan {
         if samplers.is_empty() || opts.seeds == 0 {
             return Err(Error::Usage("give at least one sampler and one seed".into()));
         }
+        let what = format!("{} sampler(s) × --seeds {}", samplers.len(), opts.seeds);
+        crate::limits::check_runs(samplers.len() as u64 * opts.seeds as u64, what).map_err(Error::Usage)?;
         let seeds = (1..=opts.seeds as u64).map(|k| seed.wrapping_add(k)).collect();
         Ok(Self { samplers, budget, max_depth, resolution: report.resolution, seeds })
     }

@@ -175,7 +175,8 @@ impl SamplerRuns {
             convergence: if run.convergence.is_empty() { vec![(run.seconds, m.rel_mse)] } else { run.convergence },
         };
         if self.first.is_none() {
-            self.first = Some(write_first(opts, plan, kind, &run.film, &result, reference)?);
+            let named = (kind, self.strategy.label(kind));
+            self.first = Some(write_first(opts, plan, named, &run.film, &result, reference)?);
         }
         self.runs.push(result);
         Ok(())
@@ -196,6 +197,7 @@ impl SamplerRuns {
         let efficiency = Stat { mean: efficiency(rel_mse.mean, seconds.mean), std: stat(&|r| r.efficiency).std };
         let result = SamplerResult {
             sampler: self.kind.name().into(),
+            label: self.strategy.label(self.kind),
             build_seconds: self.build_seconds,
             memory_bytes: self.memory_bytes,
             seconds,
@@ -266,7 +268,7 @@ impl SeedStatistics {
 pub(crate) fn write_first(
     opts: &CompareOptions,
     plan: &Plan,
-    kind: LightSamplerKind,
+    (kind, label): (LightSamplerKind, String),
     film: &Film,
     run: &RunResult,
     reference: &Reference,
@@ -289,7 +291,7 @@ pub(crate) fn write_first(
     let errors = error_picture(size, &relative_error_map(&pixels, &reference.pixels));
     crate::io::png::write_srgb8(&err_png, size, errors.bytes.clone())?;
     let column = SheetColumn {
-        title: kind.name().into(),
+        title: label,
         caption: format!("{} spp, {:.2} s\nrelMSE {}", run.spp, run.seconds, num(run.rel_mse)),
         render: preview_picture(size, &pixels, opts.exposure),
         error: Some(errors),

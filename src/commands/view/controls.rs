@@ -13,8 +13,8 @@ const ORBIT_PER_PIXEL: f32 = 0.01;
 /// Share of the distance to the pivot one wheel notch moves the camera.
 const DOLLY_PER_NOTCH: f32 = 0.1;
 
-/// The keys, as the status bar and `--help` list them.
-pub const KEYS: &str = "1-7 sampler  +/- exposure  E error  S save  R reset  Esc quit";
+/// The keys, as the status bar lists them.
+pub const KEYS: [&str; 6] = ["1-7 sampler", "+/- exposure", "E error", "S save", "R reset", "Esc quit"];
 
 /// What a key asks for.
 #[derive(Clone, Copy, Debug, PartialEq)]

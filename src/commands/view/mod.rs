@@ -158,7 +158,7 @@ fn reference(opts: &ViewOptions, size: UVec2) -> Result<Option<(PathBuf, Vec<Rgb
 
 /// A window for a `size` image and the status bar, or an error saying what to do instead.
 fn open_window(title: &str, size: UVec2) -> Result<Window> {
-    let height = size.y + screen::BAR_HEIGHT;
+    let height = size.y + screen::bar_height(size.x, &KEYS);
     let mut window = Window::new(title, size.x as usize, height as usize, WindowOptions::default()).map_err(|e| {
         Error::Usage(format!(
             "cannot open a window ({e}); `myriad view` needs a display (is DISPLAY set?). \
@@ -286,7 +286,11 @@ impl<'a> Ui<'a> {
             if redraw {
                 buffer = self.compose();
                 window
-                    .update_with_buffer(&buffer, self.size.x as usize, (self.size.y + screen::BAR_HEIGHT) as usize)
+                    .update_with_buffer(
+                        &buffer,
+                        self.size.x as usize,
+                        (self.size.y + screen::bar_height(self.size.x, &KEYS)) as usize,
+                    )
                     .map_err(|e| Error::Usage(format!("the window failed: {e}")))?;
                 self.shown();
             } else {
@@ -392,7 +396,8 @@ impl<'a> Ui<'a> {
         }
         let Some(frame) = &self.frame else {
             let black = vec![Rgb::ZERO; (self.size.x * self.size.y) as usize];
-            return screen::compose(self.size, &black, 0.0, None, [&format!("{}: rendering...", self.sampler), KEYS]);
+            let status = [format!("{}: rendering...", self.sampler)];
+            return screen::compose(self.size, &black, 0.0, None, &status, &KEYS);
         };
         let error = self.reference.as_ref().filter(|_| self.show_error).map(|r| r.1.as_slice());
         let spp = match (frame.spp, frame.done) {
@@ -400,15 +405,15 @@ impl<'a> Ui<'a> {
             (n, true) => format!("{n} spp (done)"),
             (n, false) => format!("{n} spp"),
         };
-        let status = format!(
-            "{}  {spp}  {}samples/s  {} frames/s  {}  {}",
-            frame.sampler,
-            super::human_rate(frame.samples_per_second),
-            self.arrivals.len(),
+        let status = [
+            frame.label.clone(),
+            spp,
+            format!("{}samples/s", super::human_rate(frame.samples_per_second)),
+            format!("{} frames/s", self.arrivals.len()),
             if error.is_some() { "relative error".to_string() } else { format!("exposure {:+.1}", self.exposure) },
-            self.message
-        );
-        screen::compose(self.size, &frame.pixels, self.exposure, error, [&status, KEYS])
+            self.message.clone(),
+        ];
+        screen::compose(self.size, &frame.pixels, self.exposure, error, &status, &KEYS)
     }
 
     /// Notes what the window now shows: the first image, an accumulation done.

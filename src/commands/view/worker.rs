@@ -56,6 +56,8 @@ pub struct Frame {
     pub generation: u64,
     /// Its sampler.
     pub sampler: LightSamplerKind,
+    /// What chose its lights ([`LightStrategy::label`]): the sampler, or what stood in for it.
+    pub label: String,
     /// Mean of each pixel, row-major.
     pub pixels: Vec<Rgb>,
     /// Samples per pixel so far (0: the half-resolution preview).
@@ -190,6 +192,7 @@ fn accumulate(
         let frame = Frame {
             generation: view.generation,
             sampler: view.sampler,
+            label: strategy.label(view.sampler),
             pixels: film.means(),
             spp: film.spp(),
             samples_per_second: size.x as f64 * size.y as f64 * film.spp() as f64 / elapsed.as_secs_f64().max(1e-9),
@@ -222,6 +225,7 @@ fn preview(
     Some(Frame {
         generation: view.generation,
         sampler: view.sampler,
+        label: strategy.label(view.sampler),
         pixels,
         spp: 0,
         samples_per_second: 0.0,

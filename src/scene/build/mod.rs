@@ -109,21 +109,25 @@ fn placements(desc: &SceneDescription) -> Vec<(Vec<Placement<'_>>, bool)> {
 
 /// An error when the built scene and its image would not fit the memory limit.
 fn check_size(desc: &SceneDescription, placements: &[(Vec<Placement>, bool)], resolution: UVec2) -> Result<()> {
-    let (mut triangles, mut instances, mut lights) = (0u64, 0u64, desc.lights.len() as u64);
+    // `stored`: triangles kept in memory (a shared mesh once); `world`: in the scene, every
+    // placement counted, as the render summary and `info` count them.
+    let (mut stored, mut world, mut instances, mut lights) = (0u64, 0u64, 0u64, desc.lights.len() as u64);
     for ((p, shared), mesh) in placements.iter().zip(&desc.meshes) {
         let n = mesh.triangles.len() as u64;
+        let placed = n.saturating_mul(p.len() as u64);
+        world = world.saturating_add(placed);
         if *shared {
-            (triangles, instances) = (triangles + n, instances + p.len() as u64);
+            (stored, instances) = (stored + n, instances + p.len() as u64);
         } else {
-            triangles = triangles.saturating_add(n.saturating_mul(p.len() as u64));
+            stored = stored.saturating_add(placed);
             if desc.materials[mesh.material as usize].is_emissive() {
-                lights = lights.saturating_add(n.saturating_mul(p.len() as u64));
+                lights = lights.saturating_add(placed);
             }
         }
     }
     let pixels = resolution.x as u64 * resolution.y as u64;
     let bytes = [
-        (triangles, BYTES_PER_TRIANGLE),
+        (stored, BYTES_PER_TRIANGLE),
         (instances, BYTES_PER_INSTANCE),
         (lights, BYTES_PER_LIGHT),
         (pixels, BYTES_PER_PIXEL),
@@ -133,8 +137,10 @@ fn check_size(desc: &SceneDescription, placements: &[(Vec<Placement>, bool)], re
     check_memory(
         bytes,
         format_args!(
-            "this scene ({triangles} triangles, {lights} lights, a {} × {} image)",
-            resolution.x, resolution.y
+            "this scene ({world} triangles{}, up to {lights} lights, a {} × {} image)",
+            if stored < world { format!(" ({stored} stored: instances share theirs)") } else { String::new() },
+            resolution.x,
+            resolution.y
         ),
     )
     .map_err(|m| Error::scene(&desc.source, "scene", m))
@@ -181,6 +187,13 @@ pub fn build(mut desc: SceneDescription, opts: &BuildOptions) -> Result<(Scene, 
     let mut warnings = desc.warnings.clone();
     if degenerate_emitters > 0 {
         warnings.push(format!("{degenerate_emitters} emissive triangles have zero area and do not emit"));
+    }
+    if lights.is_empty() {
+        warnings.push(
+            "the scene has no lights (no emissive surface, light or environment): it renders black; give a \
+             material emission, or add a light or an environment"
+                .into(),
+        );
     }
     lights.shrink_to_fit();
     stats.record(&desc, &geometry, &lights, start);
