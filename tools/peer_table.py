@@ -3,7 +3,7 @@
 
     python3 tools/peer_table.py [--scenes cornell_grid_7,materials] [--spp 64] [--seeds 2]
         [--peers tools/peers] [--peers-python ~/.cache/myriad-peers/bin/python]
-        [--out target/peers] [--readme README.md]
+        [--out target/peers] [--doc docs/performance.md]
 
 For each scene `tests/data/blender/NAME.glb` it renders, at 320×240 and `--spp` samples with
 8 bounces (myriad: 9 scattering events), every seed of `--seeds`:
@@ -18,7 +18,7 @@ JSON: Blender's start-up and import, and Mitsuba's kernel compilation, excluded)
 favours them. Efficiency = 1 / (relMSE · CPU s), means over the seeds.
 
 Writes `OUT/NAME/...` (every image and JSON) and `OUT/table.md`, prints the table, and with
-`--readme` replaces the text between `<!-- peers:begin -->` and `<!-- peers:end -->` in it.
+`--doc` replaces the text between `<!-- peers:begin -->` and `<!-- peers:end -->` in it.
 Peer renders already in OUT with the same settings are reused (`--fresh` renders them again).
 Only the Python standard library is used here; the peers need their venv
 (`tools/peers/setup_venv.sh`).
@@ -127,7 +127,7 @@ def main():
     ap.add_argument("--peers-python", default=str(Path.home() / ".cache/myriad-peers/bin/python"))
     ap.add_argument("--myriad", default=str(ROOT / "target/release/myriad"))
     ap.add_argument("--out", default=str(ROOT / "target/peers"))
-    ap.add_argument("--readme", help="README to put the table into, between the peers markers")
+    ap.add_argument("--doc", help="page to put the table into, between the peers markers (docs/performance.md)")
     ap.add_argument("--fresh", action="store_true", help="render the peers again even if their images are there")
     args = ap.parse_args()
     args.seed_list = list(range(1, args.seeds + 1))
@@ -143,13 +143,13 @@ def main():
         text += table(scene, rows, args.spp) + "\n"
         print(table(scene, rows, args.spp), flush=True)
     Path(args.out, "table.md").write_text(text)
-    if args.readme:
-        readme = Path(args.readme).read_text()
+    if args.doc:
+        readme = Path(args.doc).read_text()
         begin, end = "<!-- peers:begin -->", "<!-- peers:end -->"
         if begin not in readme or end not in readme:
-            sys.exit(f"{args.readme} has no {begin} … {end} markers")
+            sys.exit(f"{args.doc} has no {begin} … {end} markers")
         head, rest = readme.split(begin, 1)
-        Path(args.readme).write_text(head + begin + "\n" + text + rest[rest.index(end):])
+        Path(args.doc).write_text(head + begin + "\n" + text + rest[rest.index(end):])
 
 
 if __name__ == "__main__":

@@ -37,12 +37,15 @@
   // What is shown: which image, how, and where.
   const state = { index: 0, mode: "render", exposure: data.exposure, scale: 1, x: 0, y: 0 };
   // The image as large as the view holds it, centred (key f); key 0 shows it at 1:1.
+  // A fitted image stays fitted when the window changes size, until the user zooms or pans.
   function fitView() {
     state.scale = Math.min(view.clientWidth / W, view.clientHeight / H);
     state.x = (view.clientWidth - W * state.scale) / 2;
     state.y = (view.clientHeight - H * state.scale) / 2;
+    state.fitted = true;
   }
   fitView();
+  window.addEventListener("resize", () => { if (state.fitted) { fitView(); place(); } });
 
   // The PNG previews' tonemap: exposure, clamp, sRGB curve, 8 bits.
   function srgb8(v) {
@@ -141,6 +144,7 @@
     if (drag) {
       state.x = drag.x + mx - drag.mx;
       state.y = drag.y + my - drag.my;
+      state.fitted = false;
       place();
     }
     cursor = { px: Math.floor((mx - state.x) / state.scale), py: Math.floor((my - state.y) / state.scale) };
@@ -163,6 +167,7 @@
     state.x = mx - ((mx - state.x) * s) / state.scale;
     state.y = my - ((my - state.y) * s) / state.scale;
     state.scale = s;
+    state.fitted = false;
     place();
   }, { passive: false });
 
@@ -178,7 +183,7 @@
     else if (k === "d") mode("diff");
     else if (k === "+" || k === "=") { state.exposure += 0.5; paint(); }
     else if (k === "-") { state.exposure -= 0.5; paint(); }
-    else if (k === "0") { state.scale = 1; state.x = 0; state.y = 0; place(); }
+    else if (k === "0") { state.scale = 1; state.x = 0; state.y = 0; state.fitted = false; place(); }
     else if (k === "f") { fitView(); place(); }
     else return;
     ev.preventDefault();

@@ -6,6 +6,7 @@ mod cli;
 mod common;
 mod compare;
 mod display;
+mod docs;
 mod environment;
 mod formats;
 mod light_points;

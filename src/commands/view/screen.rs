@@ -19,15 +19,16 @@ const TEXT_COLOR: [u8; 3] = [220, 220, 220];
 /// Between two fields on one line.
 const GAP: &str = "  ";
 
-/// The longest status the bar must hold without cutting a field, for sizing it: the longest
-/// sampler label, then spp, speed, frame rate, the mode and a saved file's name.
+/// The longest status the bar must hold, for sizing it: the longest sampler label, then
+/// spp, speed, frame rate, the mode and the longest message the viewer gives (a path it
+/// saved or reads may be longer, and then takes a line more than the bar has).
 const WIDEST_STATUS: [&str; 6] = [
     "cells (as every light at diffuse points, tree elsewhere)",
     "65536 spp (done)",
     "999.99 Msamples/s",
     "999 frames/s",
     "relative error",
-    "saved view-learned-65536spp.exr",
+    "no reference to show the error against: pass --reference",
 ];
 
 /// Characters that fit one line of a `width`-pixel bar.
@@ -35,11 +36,33 @@ fn chars_per_line(width: u32) -> usize {
     (((width as f32 - 2.0 * MARGIN_PX) / text_advance(TEXT_PX)).floor() as usize).max(1)
 }
 
+/// `text` in pieces of at most `chars` characters, broken between words where it is longer
+/// (a word longer than a line is a piece of its own).
+fn pieces(text: &str, chars: usize) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for word in text.split(' ') {
+        match out.last_mut() {
+            Some(piece) if piece.chars().count() + 1 + word.chars().count() <= chars => {
+                piece.push(' ');
+                piece.push_str(word);
+            }
+            _ => out.push(word.to_string()),
+        }
+    }
+    out
+}
+
 /// `fields` joined into lines of at most `chars` characters, a field moved whole to the next
-/// line rather than cut (one longer than a line stands alone and is cut at the edge).
+/// line rather than cut; one longer than a line is broken between its words.
 pub fn wrap<S: AsRef<str>>(fields: &[S], chars: usize) -> Vec<String> {
     let mut lines: Vec<String> = Vec::new();
-    for field in fields.iter().map(AsRef::as_ref).filter(|f| !f.is_empty()) {
+    let split = fields
+        .iter()
+        .map(AsRef::as_ref)
+        .filter(|f| !f.is_empty())
+        .flat_map(|f| if f.chars().count() > chars { pieces(f, chars) } else { vec![f.to_string()] });
+    for field in split {
+        let field = field.as_str();
         match lines.last_mut() {
             Some(line) if line.chars().count() + GAP.len() + field.chars().count() <= chars => {
                 line.push_str(GAP);
@@ -125,5 +148,6 @@ mod tests {
         assert!(bar_height(320, &KEYS) > bar_height(1280, &KEYS));
         assert_eq!(wrap(&["ab", "cd", "ef"], 6), ["ab  cd", "ef"]);
         assert_eq!(wrap(&["abcdefgh", "", "x"], 6), ["abcdefgh", "x"]);
+        assert_eq!(wrap(&["no reference here", "ok"], 8), ["no", "reference", "here  ok"]);
     }
 }

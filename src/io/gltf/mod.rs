@@ -2,10 +2,11 @@
 //!
 //! Reads the default scene (or the one asked for) with its whole node hierarchy (matrix or
 //! TRS transforms), every triangle primitive (strips and fans converted; points and lines
-//! skipped with one warning), the metallic-roughness materials with
-//! KHR_materials_emissive_strength, KHR_materials_specular and KHR_texture_transform, alpha
-//! masks, normal maps, perspective cameras and KHR_lights_punctual lights (intensities ×
-//! `punctual_scale`, 1/683 by default: Blender writes W·683/(4π) cd and W/m²·683 lx).
+//! skipped with one warning), the metallic-roughness materials with the extensions in
+//! `SUPPORTED` (emissive strength, specular, IOR, clearcoat, transmission, volume, texture
+//! transforms), alpha masks and blending, normal maps, perspective cameras and
+//! KHR_lights_punctual lights (intensities × `punctual_scale`, 1/683 by default: Blender
+//! writes W·683/(4π) cd and W/m²·683 lx). Other extensions are named in one warning.
 //!
 //! Each primitive becomes one mesh, stored once however many nodes use it (instancing).
 //! The document's structure is checked before anything walks it (`check.rs`: indices, sizes,

@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Remakes the pictures of README.md and docs/ from the repository alone:
+#   docs/images/render.png        scenes/street.ron (10 280 lights), 640×480, 256 spp
+#   docs/images/samplers.png      a comparison's contact sheet: offices.ron (768 lamps, most
+#                                 behind walls), five samplers at equal time (2 s each),
+#                                 renders above their error maps
+#   docs/images/compare-page.png  that comparison's report.html in headless Chromium
+# Needs Chromium for the last (Debian: apt-get install chromium). Takes about two minutes.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cargo build --release -q
+myriad=target/release/myriad
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+mkdir -p docs/images
+
+"$myriad" render scenes/street.ron --resolution 640x480 --spp 256 --seed 1 -q \
+    -o "$work/street.exr" --png docs/images/render.png
+"$myriad" compare scenes/offices.ron --samplers uniform,power,tree,learned,cells --time 2 --seeds 1 \
+    --resolution 320x240 --reference-spp 1024 --out-dir "$work/compare" -q
+cp "$work/compare/contact-sheet.png" docs/images/samplers.png
+
+chromium=$(command -v chromium || command -v chromium-browser || command -v google-chrome || true)
+if [ -z "$chromium" ]; then
+    echo "no Chromium: docs/images/compare-page.png not remade (apt-get install chromium)" >&2
+    exit 1
+fi
+# The page decodes its images in JavaScript: give it virtual time to finish before the shot.
+"$chromium" --headless=new --no-sandbox --disable-gpu --hide-scrollbars --no-first-run \
+    --disable-background-networking --user-data-dir="$work/profile" --window-size=1200,900 \
+    --force-device-scale-factor=1 --virtual-time-budget=15000 \
+    --screenshot="$PWD/docs/images/compare-page.png" "file://$work/compare/report.html" 2>/dev/null
+echo "wrote docs/images/render.png, docs/images/samplers.png, docs/images/compare-page.png"
