@@ -1,10 +1,13 @@
-//! The pinhole perspective camera: (pixel, jitter) → primary ray.
+//! The perspective camera: (pixel, jitter[, lens point]) → primary ray.
 //!
-//! Owns: the camera model shared by every loader (RON look-at, glTF node matrix). The image
-//! plane follows glTF: the camera looks down its local −Z with +Y up, `yfov` is the vertical
-//! field of view, and the horizontal extent follows the output aspect ratio (so `yfov` is kept
-//! when the ratio changes; docs/conventions.md). Pixel (0,0) is the top-left corner; the
-//! pixel filter is a 1-pixel box, as in the Cycles references.
+//! Owns: the camera model shared by every loader (RON look-at, glTF node matrix, the Blender
+//! add-on). The image plane follows glTF: the camera looks down its local −Z with +Y up. The
+//! field of view spans one dimension, its [`Fit`]: the height by default (glTF's `yfov`,
+//! kept when the aspect ratio changes; docs/conventions.md), or the width, or the larger of
+//! the two (Blender's sensor fit). The view may be shifted (Blender's lens shift, in units of
+//! the fitted dimension) and focused through a thin lens (depth of field: a disk aperture, a
+//! focal plane at the focus distance, as Cycles has them). Pixel (0,0) is the top-left
+//! corner; the pixel filter is a 1-pixel box, as in the Cycles references.
 
 use crate::geometry::Ray;
 use crate::math::{Mat4, UVec2, Vec2, Vec3A};
@@ -15,14 +18,40 @@ fn check_position(name: &str, p: Vec3A) -> Result<(), String> {
     if p.is_finite() { Ok(()) } else { Err(format!("its {name} {p} is not finite")) }
 }
 
-/// A pinhole camera.
+/// Which image dimension the field of view spans.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Fit {
+    /// The height (glTF's `yfov`).
+    #[default]
+    Vertical,
+    /// The width.
+    Horizontal,
+    /// The larger of the two (Blender's Auto sensor fit).
+    Auto,
+}
+
+/// A thin lens: the aperture disk and the distance of the plane in focus.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ThinLens {
+    /// Radius of the aperture, metres (Blender: focal length / (2 · f-stop)).
+    pub aperture_radius: f32,
+    /// Distance of the focal plane along the view axis, metres.
+    pub focus_distance: f32,
+}
+
+/// A perspective camera.
 #[derive(Clone, Copy, Debug)]
 pub struct Camera {
     origin: Vec3A,
     right: Vec3A,
     up: Vec3A,
     forward: Vec3A,
-    tan_half_fov_y: f32,
+    /// tan of half the field of view along the fitted dimension.
+    tan_half_fov: f32,
+    fit: Fit,
+    /// The view's shift, in units of the fitted dimension's extent (x right, y up).
+    shift: Vec2,
+    lens: Option<ThinLens>,
 }
 
 impl Camera {
@@ -66,7 +95,44 @@ impl Camera {
         if !(yfov > 0.0 && yfov < std::f32::consts::PI) {
             return Err(format!("its vertical field of view {}° is not between 0° and 180°", yfov.to_degrees()));
         }
-        Ok(Self { origin, right, up, forward, tan_half_fov_y: (0.5 * yfov).tan() })
+        Ok(Self {
+            origin,
+            right,
+            up,
+            forward,
+            tan_half_fov: (0.5 * yfov).tan(),
+            fit: Fit::Vertical,
+            shift: Vec2::ZERO,
+            lens: None,
+        })
+    }
+
+    /// The same camera with its field of view spanning `fit` and the view shifted by `shift`
+    /// (fractions of the fitted dimension's extent; positive: right and up). An error says
+    /// what is wrong.
+    pub fn with_projection(self, fit: Fit, shift: Vec2) -> Result<Self, String> {
+        if !shift.is_finite() || shift.abs().max_element() > 100.0 {
+            return Err(format!("its shift {shift} is not a finite shift within ±100"));
+        }
+        Ok(Self { fit, shift, ..self })
+    }
+
+    /// The same camera focused through `lens`. An error says what is wrong.
+    pub fn with_lens(self, lens: ThinLens) -> Result<Self, String> {
+        let ThinLens { aperture_radius: r, focus_distance: d } = lens;
+        if !(r >= 0.0 && r.is_finite() && d > 0.0 && d.is_finite()) {
+            return Err(format!(
+                "its aperture radius {r} and focus distance {d} must be finite, the radius ≥ 0 and the distance > 0"
+            ));
+        }
+        Ok(Self { lens: (r > 0.0).then_some(lens), ..self })
+    }
+
+    /// Whether rays start across a lens aperture (and [`ray_through_lens`](Self::ray_through_lens)
+    /// wants two numbers for it).
+    #[inline]
+    pub fn has_lens(&self) -> bool {
+        self.lens.is_some()
     }
 
     /// Where the camera is.
@@ -109,20 +175,58 @@ impl Camera {
     /// The world-space height one pixel of an image `height` pixels high spans at `distance`
     /// in front of the camera: how far a drag of one pixel pans there.
     pub fn pixel_footprint(&self, distance: f32, height: u32) -> f32 {
-        2.0 * distance * self.tan_half_fov_y / height.max(1) as f32
+        2.0 * distance * self.tan_half_fov / height.max(1) as f32
+    }
+
+    /// tan of half the horizontal and vertical fields of view of an image of `res` pixels.
+    #[inline]
+    fn tan_half_fovs(&self, res: Vec2) -> Vec2 {
+        let horizontal = match self.fit {
+            Fit::Vertical => false,
+            Fit::Horizontal => true,
+            Fit::Auto => res.x > res.y,
+        };
+        if horizontal {
+            Vec2::new(self.tan_half_fov, self.tan_half_fov * res.y / res.x)
+        } else {
+            Vec2::new(self.tan_half_fov * res.x / res.y, self.tan_half_fov)
+        }
+    }
+
+    /// The direction, in camera space (x right, y up, z forward, unnormalised with z = 1),
+    /// through `pixel` + `jitter` of an image of `resolution`.
+    #[inline]
+    fn camera_direction(&self, pixel: UVec2, resolution: UVec2, jitter: Vec2) -> Vec2 {
+        let res = resolution.as_vec2();
+        let ndc = (pixel.as_vec2() + jitter) / res; // [0,1)², y down
+        let tan = self.tan_half_fovs(res);
+        // A shift moves the view by a fraction of the fitted dimension's whole extent.
+        let offset = 2.0 * self.tan_half_fov * self.shift;
+        Vec2::new((2.0 * ndc.x - 1.0) * tan.x, (1.0 - 2.0 * ndc.y) * tan.y) + offset
     }
 
     /// The primary ray through `pixel` of an image of `resolution` pixels (any size: the
-    /// vertical field of view is kept) at sub-pixel offset `jitter ∈ [0,1)²`; unit direction.
+    /// fitted field of view is kept) at sub-pixel offset `jitter ∈ [0,1)²`, from the centre
+    /// of the lens; unit direction.
     #[inline]
     pub fn ray(&self, pixel: UVec2, resolution: UVec2, jitter: Vec2) -> Ray {
-        let res = resolution.as_vec2();
-        let ndc = (pixel.as_vec2() + jitter) / res; // [0,1)², y down
-        let aspect = res.x / res.y;
-        let sx = (2.0 * ndc.x - 1.0) * self.tan_half_fov_y * aspect;
-        let sy = (1.0 - 2.0 * ndc.y) * self.tan_half_fov_y;
-        let dir = (self.forward + self.right * sx + self.up * sy).normalize();
+        let s = self.camera_direction(pixel, resolution, jitter);
+        let dir = (self.forward + self.right * s.x + self.up * s.y).normalize();
         Ray::new(self.origin, dir)
+    }
+
+    /// [`ray`](Self::ray) from the point `lens_u ∈ [0,1)²` picks uniformly on the aperture
+    /// disk, towards where the pinhole ray meets the focal plane (Cycles' thin lens); the
+    /// pinhole ray without a lens.
+    #[inline]
+    pub fn ray_through_lens(&self, pixel: UVec2, resolution: UVec2, jitter: Vec2, lens_u: Vec2) -> Ray {
+        let Some(lens) = self.lens else { return self.ray(pixel, resolution, jitter) };
+        let s = self.camera_direction(pixel, resolution, jitter);
+        // The pinhole direction has z = 1: it meets the focal plane at focus_distance · (s, 1).
+        let focus = lens.focus_distance * (self.forward + self.right * s.x + self.up * s.y);
+        let a = crate::math::warp::square_to_disk_concentric(lens_u) * lens.aperture_radius;
+        let start = self.right * a.x + self.up * a.y;
+        Ray::new(self.origin + start, (focus - start).normalize())
     }
 }
 
@@ -150,6 +254,46 @@ mod tests {
         assert!(e.contains("200.5"), "{e}");
         let e = Camera::look_at(Vec3A::splat(f32::INFINITY), Vec3A::X, Vec3A::Y, 0.6).unwrap_err();
         assert!(e.contains("eye"), "{e}");
+    }
+
+    #[test]
+    fn the_field_of_view_spans_the_fitted_dimension_and_a_shift_moves_the_view() {
+        let look = || Camera::look_at(Vec3A::ZERO, -Vec3A::Z, Vec3A::Y, 0.6).unwrap();
+        let angle_x = |r: &Ray| r.dir.x.atan2(-r.dir.z);
+        let angle_y = |r: &Ray| r.dir.y.atan2(-r.dir.z);
+        let (wide, tall) = (UVec2::new(40, 20), UVec2::new(20, 40));
+        // Horizontal: the left edge is half the field of view off the axis.
+        let h = look().with_projection(Fit::Horizontal, Vec2::ZERO).unwrap();
+        assert!((angle_x(&h.ray(UVec2::new(0, 10), wide, Vec2::new(0.0, 0.5))) + 0.3).abs() < 1e-5);
+        // Auto: the larger dimension, whichever it is.
+        let a = look().with_projection(Fit::Auto, Vec2::ZERO).unwrap();
+        assert!((angle_x(&a.ray(UVec2::new(0, 10), wide, Vec2::new(0.0, 0.5))) + 0.3).abs() < 1e-5);
+        assert!((angle_y(&a.ray(UVec2::new(10, 0), tall, Vec2::new(0.5, 0.0))) - 0.3).abs() < 1e-5);
+        // A shift of 0.1 moves the centre by a tenth of the fitted (larger) extent, in x and in y.
+        let s = look().with_projection(Fit::Auto, Vec2::new(0.1, 0.1)).unwrap();
+        let c = s.ray(UVec2::new(20, 10), wide, Vec2::ZERO);
+        let extent = 2.0 * 0.3f32.tan();
+        assert!((c.dir.x / -c.dir.z - 0.1 * extent).abs() < 1e-5 && (c.dir.y / -c.dir.z - 0.1 * extent).abs() < 1e-5);
+        assert!(look().with_projection(Fit::Auto, Vec2::new(f32::NAN, 0.0)).is_err());
+    }
+
+    #[test]
+    fn rays_through_the_lens_meet_on_the_focal_plane() {
+        let lens = ThinLens { aperture_radius: 0.05, focus_distance: 3.0 };
+        let cam = Camera::look_at(Vec3A::ZERO, -Vec3A::Z, Vec3A::Y, 0.6).unwrap().with_lens(lens).unwrap();
+        assert!(cam.has_lens());
+        let (pixel, res, jitter) = (UVec2::new(7, 3), UVec2::new(20, 10), Vec2::splat(0.5));
+        let pinhole = cam.ray(pixel, res, jitter);
+        let focus = pinhole.at(3.0 / -pinhole.dir.z);
+        for k in 0..16 {
+            let u = Vec2::new((k as f32 * 0.618).fract(), (k as f32 * 0.382 + 0.2).fract());
+            let r = cam.ray_through_lens(pixel, res, jitter, u);
+            assert!(r.origin.z == 0.0 && r.origin.length() <= 0.05 + 1e-6, "{}", r.origin);
+            let at = r.at((3.0 - r.origin.z) / -r.dir.z);
+            assert!((at - focus).length() < 1e-4, "{at} vs {focus}");
+        }
+        let bad = ThinLens { aperture_radius: -1.0, focus_distance: 3.0 };
+        assert!(Camera::look_at(Vec3A::ZERO, -Vec3A::Z, Vec3A::Y, 0.6).unwrap().with_lens(bad).is_err());
     }
 
     #[test]

@@ -244,7 +244,12 @@ fn render_pass(pass: &Pass, film: &mut Film, recording: &Seen, watch: Watch) -> 
                 let pixel = UVec2::new(index as u32 % size.x, index as u32 / size.x);
                 for s in first..first + count {
                     let stream = SampleStream::new(settings.seed, index as u64, s as u64);
-                    let ray = scene.camera.ray(pixel, size, stream.get_2d(0, Dim::PixelJitter, 0));
+                    let jitter = stream.get_2d(0, Dim::PixelJitter, 0);
+                    let ray = if scene.camera.has_lens() {
+                        scene.camera.ray_through_lens(pixel, size, jitter, stream.get_2d(0, Dim::Lens, 0))
+                    } else {
+                        scene.camera.ray(pixel, size, jitter)
+                    };
                     let smp = path::radiance(scene, strategy, ray, &stream, settings.max_depth, &mut tally);
                     if smp.radiance.is_finite() {
                         px.add(smp.radiance);

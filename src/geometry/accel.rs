@@ -362,3 +362,53 @@ mod regression {
         assert!(accel.occluded(&ray, 2.0, |_, _, _, _| true));
     }
 }
+
+/// A box of the [`BoxBvh`], by its corners.
+struct BoxPrim(Aabb);
+
+impl Boundable for BoxPrim {
+    fn aabb(&self) -> Aabb {
+        self.0
+    }
+}
+
+/// A BVH over boxes in which a ray visits every box it passes through, nearest or not: what
+/// finds the lamps along a ray (lights with a shape of their own, which camera and BSDF rays
+/// see along their whole way and which cast no shadow).
+pub struct BoxBvh {
+    bvh: Option<CwBvh>,
+}
+
+impl BoxBvh {
+    /// The BVH over `boxes` (each its min and max corner); empty for none.
+    pub fn build(boxes: &[(Vec3A, Vec3A)]) -> Self {
+        if boxes.is_empty() {
+            return Self { bvh: None };
+        }
+        let prims: Vec<BoxPrim> = boxes.iter().map(|&(min, max)| BoxPrim(Aabb { min, max })).collect();
+        Self { bvh: Some(build_cwbvh(&prims, BvhBuildParams::medium_build(), &mut Duration::default())) }
+    }
+
+    /// True when it holds no box.
+    pub fn is_empty(&self) -> bool {
+        self.bvh.is_none()
+    }
+
+    /// Calls `visit(i)` for box `i` of every box `ray` passes through within `t_max` (and
+    /// perhaps a few it passes near: the caller tests the shape inside).
+    #[inline]
+    pub fn for_each_candidate(&self, ray: &Ray, t_max: f32, mut visit: impl FnMut(u32)) {
+        let Some(bvh) = self.bvh.as_ref() else { return };
+        traverse::closest(bvh, obvhs_ray(ray.origin, ray.dir, t_max), |_, group| {
+            group.slots().for_each(|slot| visit(bvh.primitive_indices[slot as usize]));
+            None
+        });
+    }
+
+    /// Bytes of its nodes and index table.
+    pub fn memory_bytes(&self) -> usize {
+        self.bvh
+            .as_ref()
+            .map_or(0, |b| b.nodes.len() * std::mem::size_of_val(&b.nodes[0]) + b.primitive_indices.len() * 4)
+    }
+}

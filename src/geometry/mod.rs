@@ -13,7 +13,7 @@ mod offset;
 mod traverse;
 mod triangles;
 
-pub use accel::{Accel, AccelStats, Blas, Instance, RawHit};
+pub use accel::{Accel, AccelStats, Blas, BoxBvh, Instance, RawHit};
 pub use hit::{SurfaceHit, TriangleRef};
 pub use mesh::{Attributes, Geometry, GeometryBuilder, NO_LIGHT, TriangleInfo};
 pub use offset::offset_ray_origin;

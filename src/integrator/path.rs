@@ -66,13 +66,49 @@ struct Previous {
     every_light: bool,
 }
 
-/// Radiance from the environment along `dir` for a ray that left the scene, MIS-weighted
-/// against next-event estimation when the ray was found by BSDF sampling at `prev`.
+/// Radiance from the environment and the suns with an angle along `dir` for a ray that left
+/// the scene, MIS-weighted against next-event estimation when the ray was found by BSDF
+/// sampling at `prev` (a camera ray sees a sun only where it is camera-visible).
 #[inline]
 fn escaped(scene: &Scene, strategy: &LightStrategy, dir: Vec3A, prev: Option<Previous>) -> Rgb {
-    let Some(id) = scene.environment else { return Rgb::ZERO };
-    let Light::Environment(env) = &scene.lights[id as usize] else { unreachable!("the environment index") };
-    env.radiance_from(dir) * bsdf_hit_weight(strategy, id, prev, |_| env.pdf(dir))
+    let mut l = Rgb::ZERO;
+    if let Some(id) = scene.environment {
+        let Light::Environment(env) = &scene.lights[id as usize] else { unreachable!("the environment index") };
+        l += env.radiance_from(dir) * bsdf_hit_weight(strategy, id, prev, |_| env.pdf(dir));
+    }
+    for &id in &scene.suns {
+        let Light::Sun(sun) = &scene.lights[id as usize] else { unreachable!("a sun's index") };
+        if prev.is_some() || sun.camera_visible {
+            l += sun.radiance_from(dir) * bsdf_hit_weight(strategy, id, prev, |_| sun.pdf());
+        }
+    }
+    l
+}
+
+/// Radiance from the lamps `ray` passes before `t_end` (lamps stop nothing: a path takes up
+/// each one's light and goes on), MIS-weighted against next-event estimation when the ray
+/// was found by BSDF sampling at `prev`; through the volume of absorption `medium` the ray
+/// travels in. A camera ray sees only camera-visible lamps.
+#[inline]
+fn lamps_seen(
+    scene: &Scene,
+    strategy: &LightStrategy,
+    ray: &Ray,
+    t_end: f32,
+    prev: Option<Previous>,
+    medium: Rgb,
+) -> Rgb {
+    let mut l = Rgb::ZERO;
+    scene.lamps_along(ray, t_end, |id, hit| {
+        let light = &scene.lights[id as usize];
+        if prev.is_none() && !light.camera_visible() {
+            return;
+        }
+        let through = if medium != Rgb::ZERO { transmittance(medium, hit.t * ray.dir.length()) } else { Rgb::ONE };
+        let weight = bsdf_hit_weight(strategy, id, prev, |ctx| light.pdf_li(ctx.p, hit.p, hit.n));
+        l += hit.radiance * through * weight;
+    });
+    l
 }
 
 /// The MIS weight of light `id` reached by a BSDF-sampled ray from `prev` (1 for a camera
@@ -151,7 +187,12 @@ pub fn radiance(
     let mut depth = 0u32;
     loop {
         tally.rays.rays += 1;
-        let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
+        let hit = scene.intersect(&ray, f32::INFINITY);
+        if !scene.lamps.is_empty() && (prev.is_some() || scene.lamps.camera_visible()) {
+            let t_end = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+            l += beta * lamps_seen(scene, strategy, &ray, t_end, prev, medium);
+        }
+        let Some(hit) = hit else {
             l += beta * escaped(scene, strategy, ray.dir.normalize(), prev);
             break;
         };

@@ -13,14 +13,18 @@ use std::sync::Arc;
 use ::ron::extensions::Extensions;
 
 use super::LoadOptions;
+use crate::camera::{Fit, ThinLens};
 use crate::error::{Error, Result};
-use crate::light::{EnvironmentLight, SpotCurve};
+use crate::light::{EnvironmentLight, LampModel, SpotCurve};
 use crate::material::Material;
-use crate::math::{Mat4, Rgb, UVec2, Vec3A};
+use crate::math::{Mat4, Rgb, UVec2, Vec2, Vec3A};
 use crate::scene::MAX_RESOLUTION;
-use crate::scene::description::{CameraDesc, CameraPlacement, InstanceDesc, LightDesc, MeshDesc, SceneDescription};
+use crate::scene::description::{
+    CameraDesc, CameraPlacement, InstanceDesc, LampShape, LightDesc, MeshDesc, SceneDescription,
+};
 use crate::scene::format::{
-    CameraSpec, EnvironmentSpec, LightSpec, MaterialSpec, ObjectSpec, SceneFile, TransformSpec,
+    AreaShape, CameraFit, CameraSpec, EnvironmentSpec, LightSpec, MaterialSpec, ObjectSpec, SceneFile, SpotFalloff,
+    TransformSpec,
 };
 use crate::scene::shapes;
 
@@ -177,11 +181,19 @@ struct Compiler<'a> {
 
 impl Compiler<'_> {
     fn camera(&mut self, spec: &CameraSpec) {
-        let CameraSpec::Perspective { eye, look_at, up, yfov_deg } = *spec;
+        let CameraSpec::Perspective { eye, look_at, up, fov_deg, fit, shift, depth_of_field } = *spec;
         self.desc.cameras.push(CameraDesc {
             name: "camera".into(),
             placement: CameraPlacement::LookAt { eye: v3(eye), target: v3(look_at), up: v3(up) },
-            yfov: yfov_deg.to_radians(),
+            fov: fov_deg.to_radians(),
+            fit: match fit {
+                CameraFit::Vertical => Fit::Vertical,
+                CameraFit::Horizontal => Fit::Horizontal,
+                CameraFit::Auto => Fit::Auto,
+            },
+            shift: Vec2::new(shift.0, shift.1),
+            lens: depth_of_field
+                .map(|d| ThinLens { aperture_radius: d.aperture_radius, focus_distance: d.focus_distance }),
             aspect_ratio: None,
         });
     }
@@ -282,22 +294,51 @@ impl Compiler<'_> {
     fn light(&mut self, i: usize, light: &LightSpec) -> Result<()> {
         let name = |kind: &str| -> Arc<str> { Arc::from(format!("lights[{i}] {kind}")) };
         let desc = match light {
-            LightSpec::Point { position, intensity } => {
-                LightDesc::Point { name: name("Point"), position: v3(*position), intensity: v3(*intensity) }
-            }
-            LightSpec::Spot { position, direction, intensity, inner_deg, outer_deg } => LightDesc::Spot {
+            LightSpec::Point { position, intensity, radius, soft_falloff, visible } => LightDesc::Point {
+                name: name("Point"),
+                position: v3(*position),
+                intensity: v3(*intensity),
+                lamp: lamp_shape(*radius, *soft_falloff, *visible),
+            },
+            LightSpec::Spot {
+                position,
+                direction,
+                intensity,
+                inner_deg,
+                outer_deg,
+                falloff,
+                radius,
+                soft_falloff,
+                visible,
+            } => LightDesc::Spot {
                 name: name("Spot"),
                 position: v3(*position),
                 direction: v3(*direction),
                 intensity: v3(*intensity),
                 inner_angle: inner_deg.to_radians(),
                 outer_angle: outer_deg.to_radians(),
-                curve: SpotCurve::Quadratic,
+                curve: match falloff {
+                    SpotFalloff::Quadratic => SpotCurve::Quadratic,
+                    SpotFalloff::Smoothstep => SpotCurve::Smoothstep,
+                },
+                lamp: lamp_shape(*radius, *soft_falloff, *visible),
             },
-            LightSpec::Directional { direction, irradiance } => LightDesc::Directional {
+            LightSpec::Directional { direction, irradiance, angle_deg, visible } => LightDesc::Directional {
                 name: name("Directional"),
                 direction: v3(*direction),
                 irradiance: v3(*irradiance),
+                angle: angle_deg.to_radians(),
+                camera_visible: *visible,
+            },
+            LightSpec::Area { center, u, v, shape, radiance, spread_deg, visible } => LightDesc::Area {
+                name: name("Area"),
+                center: v3(*center),
+                u: 0.5 * v3(*u),
+                v: 0.5 * v3(*v),
+                ellipse: *shape == AreaShape::Ellipse,
+                radiance: v3(*radiance),
+                spread: spread_deg.to_radians(),
+                camera_visible: *visible,
             },
             LightSpec::Quad { corner, edge1, edge2, radiance, two_sided } => LightDesc::Quad {
                 name: name("Quad"),
@@ -317,4 +358,10 @@ impl Compiler<'_> {
         self.desc.lights.push(desc);
         Ok(())
     }
+}
+
+/// A point or spot light's lamp shape from the file's fields: none at radius 0 (a point).
+fn lamp_shape(radius: f32, soft_falloff: bool, visible: bool) -> Option<LampShape> {
+    let model = if soft_falloff { LampModel::FacingDisk } else { LampModel::Sphere };
+    (radius != 0.0).then_some(LampShape { radius, model, camera_visible: visible })
 }

@@ -389,6 +389,64 @@ impl Light {
                     infinite: false,
                 }
             }
+            // A lamp with a radius: the point or spot light's bounds over the sphere's box (the
+            // importance's bounding-sphere angle covers the points on it).
+            Light::Sphere(l) => {
+                let (min, max) = l.bounds();
+                let phi = floor(l.intensity().max_element());
+                match &l.spot {
+                    None => LightBounds {
+                        min,
+                        max,
+                        phi,
+                        w: Vec3A::Z,
+                        cos_theta_o: -1.0,
+                        cos_theta_e: 0.0,
+                        two_sided: false,
+                        infinite: false,
+                    },
+                    Some(cone) => {
+                        let (inner, outer) = (safe_acos(cone.cos_inner), safe_acos(cone.cos_outer));
+                        LightBounds {
+                            min,
+                            max,
+                            phi,
+                            w: cone.direction,
+                            cos_theta_o: cone.cos_inner,
+                            cos_theta_e: (outer - inner).max(MIN_SPOT_SPREAD).cos(),
+                            two_sided: false,
+                            infinite: false,
+                        }
+                    }
+                }
+            }
+            // Its peak radiance (along the normal, where a spread is brightest) over its area;
+            // a spread s emits nothing beyond s/2 from the normal.
+            Light::Area(l) => {
+                let (min, max) = l.bounds();
+                let peak = l.radiance.max_element() * l.spread.map_or(1.0, |s| s.peak());
+                LightBounds {
+                    min,
+                    max,
+                    phi: floor(peak * l.area),
+                    w: l.n,
+                    cos_theta_o: 1.0,
+                    cos_theta_e: l.spread.map_or(0.0, |s| s.cos_half()),
+                    two_sided: false,
+                    infinite: false,
+                }
+            }
+            // A cone of directions towards the sun, with its irradiance.
+            Light::Sun(l) => LightBounds {
+                min: Vec3A::ZERO,
+                max: Vec3A::ZERO,
+                phi: floor(l.irradiance.max_element()),
+                w: -l.direction,
+                cos_theta_o: l.cos_half_angle(),
+                cos_theta_e: 0.0,
+                two_sided: false,
+                infinite: true,
+            },
         }
     }
 }

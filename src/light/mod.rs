@@ -11,23 +11,30 @@
 //! and `sampling` (for the numbers that pick points).
 
 mod area;
+mod area_light;
 mod bounds;
 mod distant;
 mod environment;
 mod point;
 mod quad;
+mod sphere;
 mod spot;
+mod sun;
 mod triangle;
 
 pub use area::AreaEmission;
+pub use area_light::{AreaLight, Spread};
 pub use bounds::{BoundsPacket, LightBounds, cone_union};
 pub use distant::DistantLight;
 pub use environment::{EnvironmentLight, EnvironmentMap};
 pub use point::PointLight;
 pub use quad::QuadLight;
-pub use spot::{SpotCurve, SpotLight};
+pub use sphere::{LampModel, SphereLight};
+pub use spot::{SpotCone, SpotCurve, SpotLight};
+pub use sun::SunLight;
 pub use triangle::{EmissionTexture, TriangleLight};
 
+use crate::geometry::Ray;
 use crate::material::Image;
 use crate::math::{Rgb, Vec2, Vec3A, luminance};
 use crate::sampling::unit_f32;
@@ -54,6 +61,20 @@ pub struct LightSample {
     pub n: Vec3A,
 }
 
+/// Where a ray meets a lamp (a light with a shape of its own that is not scene geometry:
+/// [`SphereLight`], [`AreaLight`]), and the radiance it brings back from there.
+#[derive(Clone, Copy, Debug)]
+pub struct LampHit {
+    /// Ray parameter.
+    pub t: f32,
+    /// The point on the lamp.
+    pub p: Vec3A,
+    /// The lamp's normal there (for the density of having sampled it).
+    pub n: Vec3A,
+    /// Radiance arriving back along the ray.
+    pub radiance: Rgb,
+}
+
 /// Every kind of light myriad renders.
 #[derive(Clone, Debug)]
 pub enum Light {
@@ -69,6 +90,12 @@ pub enum Light {
     Quad(QuadLight),
     /// Radiance from every direction at infinity (found by rays that leave the scene).
     Environment(EnvironmentLight),
+    /// A point or spot lamp with a radius (a facing disk or a sphere).
+    Sphere(SphereLight),
+    /// A rectangle or ellipse lamp (Blender's area light).
+    Area(AreaLight),
+    /// A sun with an angular size.
+    Sun(SunLight),
 }
 
 impl Light {
@@ -85,28 +112,73 @@ impl Light {
             Light::Triangle(l) => l.sample_li(p, unit(), images),
             Light::Quad(l) => l.sample_li(p, unit()),
             Light::Environment(l) => l.sample_li(u),
+            Light::Sphere(l) => l.sample_li(p, unit()),
+            Light::Area(l) => l.sample_li(p, unit()),
+            Light::Sun(l) => l.sample_li(unit()),
         }
     }
 
     /// Solid-angle density with which [`Light::sample_li`] from `p` picks the light point `q`
-    /// with normal `n_q`. Zero for delta lights (they cannot be hit) and the environment
-    /// (which rays reach by leaving the scene: [`EnvironmentLight::pdf`]).
+    /// with normal `n_q`. Zero for delta lights (they cannot be hit); for lights at infinity
+    /// (which rays reach by leaving the scene) see [`EnvironmentLight::pdf`] and
+    /// [`SunLight::pdf`].
     #[inline]
     pub fn pdf_li(&self, p: Vec3A, q: Vec3A, n_q: Vec3A) -> f32 {
         match self {
-            Light::Point(_) | Light::Spot(_) | Light::Distant(_) | Light::Environment(_) => 0.0,
+            Light::Point(_) | Light::Spot(_) | Light::Distant(_) | Light::Environment(_) | Light::Sun(_) => 0.0,
             Light::Triangle(l) => l.emission.pdf_li(p, q, n_q, l.area),
             Light::Quad(l) => l.emission.pdf_li(p, q, n_q, l.area),
+            Light::Sphere(l) => l.pdf_li(p, q),
+            Light::Area(l) => l.pdf_li(p, q),
+        }
+    }
+
+    /// Where `ray` meets this light within `t_max` when it is a lamp (a light with a shape of
+    /// its own outside the scene's geometry: seen, let through, casting no shadow); `None`
+    /// for every other light.
+    #[inline]
+    pub fn intersect_lamp(&self, ray: &Ray, t_max: f32) -> Option<LampHit> {
+        match self {
+            Light::Sphere(l) => l.intersect(ray, t_max),
+            Light::Area(l) => l.intersect(ray, t_max),
+            _ => None,
+        }
+    }
+
+    /// The box a lamp's shape lies in, for the lamps' BVH; `None` for other lights.
+    pub fn lamp_bounds(&self) -> Option<(Vec3A, Vec3A)> {
+        match self {
+            Light::Sphere(l) => Some(l.bounds()),
+            Light::Area(l) => Some(l.bounds()),
+            _ => None,
+        }
+    }
+
+    /// Whether camera rays see this light (lamps and suns where they ask for it; emissive
+    /// surfaces always, as the scene's geometry they are).
+    pub fn camera_visible(&self) -> bool {
+        match self {
+            Light::Sphere(l) => l.camera_visible,
+            Light::Area(l) => l.camera_visible,
+            Light::Sun(l) => l.camera_visible,
+            _ => true,
         }
     }
 
     /// Radiance leaving the surface at a ray hit, along `-dir` (`dir`: the ray's direction;
     /// `n_geom`: the hit triangle's front normal; `uv`: texture coordinates at the hit, in
-    /// the scene's `images`).
+    /// the scene's `images`). Zero for lights that are not triangles: lamps bring their
+    /// radiance in their [`LampHit`].
     #[inline]
     pub fn emitted(&self, n_geom: Vec3A, dir: Vec3A, uv: Vec2, images: &[Image]) -> Rgb {
         match self {
-            Light::Point(_) | Light::Spot(_) | Light::Distant(_) | Light::Environment(_) => Rgb::ZERO,
+            Light::Point(_)
+            | Light::Spot(_)
+            | Light::Distant(_)
+            | Light::Environment(_)
+            | Light::Sphere(_)
+            | Light::Area(_)
+            | Light::Sun(_) => Rgb::ZERO,
             Light::Triangle(l) => l.emitted(uv, -dir, images),
             Light::Quad(l) => l.emission.radiance_towards(n_geom, -dir),
         }
@@ -121,6 +193,9 @@ impl Light {
             Light::Triangle(l) => AreaEmission { radiance: l.mean_radiance(), ..l.emission }.flux(l.area),
             Light::Quad(l) => l.emission.flux(l.area),
             Light::Environment(l) => l.flux(scene_radius),
+            Light::Sphere(l) => l.flux(),
+            Light::Area(l) => l.flux(),
+            Light::Sun(l) => l.flux(scene_radius),
         }
     }
 
@@ -144,6 +219,9 @@ impl Light {
             Light::Triangle(_) => "triangle",
             Light::Quad(_) => "quad",
             Light::Environment(_) => "environment",
+            Light::Sphere(_) => "sphere lamp",
+            Light::Area(_) => "area lamp",
+            Light::Sun(_) => "sun",
         }
     }
 }

@@ -34,7 +34,21 @@ pub struct SpotLight {
     pub curve: SpotCurve,
 }
 
-impl SpotLight {
+/// A spot's cone: full intensity inside `cos_inner`, none outside `cos_outer`, `curve`
+/// between (the spot lamps with a radius apply it to each light ray's own direction).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpotCone {
+    /// Unit direction the cone points to.
+    pub direction: Vec3A,
+    /// Cosine of the inner half-angle.
+    pub cos_inner: f32,
+    /// Cosine of the outer half-angle.
+    pub cos_outer: f32,
+    /// The fade between the cones.
+    pub curve: SpotCurve,
+}
+
+impl SpotCone {
     /// Angular attenuation at cosine `cos_theta` from the axis.
     #[inline]
     pub fn falloff(&self, cos_theta: f32) -> f32 {
@@ -46,6 +60,26 @@ impl SpotLight {
         }
     }
 
+    /// Flux of a light of on-axis intensity `intensity` in this cone, per channel:
+    /// 2π·I·(1 − (cos_inner + cos_outer)/2) (pbrt-v4's approximation).
+    pub fn flux(&self, intensity: Rgb) -> Rgb {
+        2.0 * PI * (1.0 - 0.5 * (self.cos_inner + self.cos_outer)) * intensity
+    }
+}
+
+impl SpotLight {
+    /// Its cone.
+    #[inline]
+    pub fn cone(&self) -> SpotCone {
+        SpotCone { direction: self.direction, cos_inner: self.cos_inner, cos_outer: self.cos_outer, curve: self.curve }
+    }
+
+    /// Angular attenuation at cosine `cos_theta` from the axis.
+    #[inline]
+    pub fn falloff(&self, cos_theta: f32) -> f32 {
+        self.cone().falloff(cos_theta)
+    }
+
     /// The (delta) sample seen from `p`; `None` outside the cone.
     #[inline]
     pub fn sample_li(&self, p: Vec3A) -> Option<LightSample> {
@@ -55,10 +89,9 @@ impl SpotLight {
         })
     }
 
-    /// Flux estimate per channel, 2π·I·(1 − (cos_inner + cos_outer)/2) (pbrt-v4's
-    /// approximation).
+    /// Flux estimate per channel ([`SpotCone::flux`]).
     pub fn flux(&self) -> Rgb {
-        2.0 * PI * (1.0 - 0.5 * (self.cos_inner + self.cos_outer)) * self.intensity
+        self.cone().flux(self.intensity)
     }
 }
 

@@ -65,6 +65,24 @@ pub fn square_to_uniform_sphere(u: Vec2) -> Vec3A {
 /// Density of [`square_to_uniform_sphere`] in solid angle.
 pub const UNIFORM_SPHERE_PDF: f32 = 0.25 * FRAC_1_PI;
 
+/// Uniform direction in the cone about +Z of half-angle α, given `1 − cos α` (> 0; passed as
+/// such so that narrow cones keep their precision); density [`uniform_cone_pdf`].
+#[inline]
+pub fn square_to_uniform_cone(u: Vec2, one_minus_cos: f32) -> Vec3A {
+    // z = 1 − u·(1 − cos α), and sin² = (1 − z)(1 + z) without cancellation.
+    let one_minus_z = u.x * one_minus_cos;
+    let z = 1.0 - one_minus_z;
+    let r = (one_minus_z * (2.0 - one_minus_z)).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    Vec3A::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// Density of [`square_to_uniform_cone`] in solid angle: 1 / (2π (1 − cos α)).
+#[inline]
+pub fn uniform_cone_pdf(one_minus_cos: f32) -> f32 {
+    1.0 / (2.0 * PI * one_minus_cos)
+}
+
 /// Uniform barycentrics (b0, b1, b2) on a triangle; density 1/area.
 ///
 /// Heitz 2019, "A Low-Distortion Map Between Triangle and Square": neighbouring `u` stay

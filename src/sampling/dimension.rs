@@ -23,6 +23,8 @@ pub enum Dim {
     BsdfDirection = 6,
     /// Russian-roulette survival test.
     RussianRoulette = 8,
+    /// Point on the camera's lens aperture (2D; bounce 0 only, with depth of field).
+    Lens = 9,
 }
 
 impl Dim {

@@ -8,7 +8,8 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use crate::light::{EnvironmentLight, SpotCurve};
+use crate::camera::{Fit, ThinLens};
+use crate::light::{EnvironmentLight, LampModel, SpotCurve};
 use crate::material::{Image, Material};
 use crate::math::{Mat4, Rgb, UVec2, Vec2, Vec3A};
 
@@ -49,8 +50,14 @@ pub struct CameraDesc {
     pub name: String,
     /// Placement.
     pub placement: CameraPlacement,
-    /// Vertical field of view, radians.
-    pub yfov: f32,
+    /// Field of view along the fitted dimension, radians.
+    pub fov: f32,
+    /// Which dimension `fov` spans (glTF: the height).
+    pub fit: Fit,
+    /// The view's shift in fractions of the fitted dimension's extent (Blender's lens shift).
+    pub shift: Vec2,
+    /// A thin lens, for depth of field.
+    pub lens: Option<ThinLens>,
     /// Width/height the camera was authored for, if known (glTF `aspectRatio`).
     pub aspect_ratio: Option<f32>,
 }
@@ -99,10 +106,22 @@ pub struct InstanceDesc {
     pub name: String,
 }
 
+/// The shape of a point or spot light with a radius (a lamp: seen by rays, casting no
+/// shadow); without one it is a point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LampShape {
+    /// Radius, metres (> 0).
+    pub radius: f32,
+    /// A disk facing each receiver (Blender's Soft Falloff) or a sphere.
+    pub model: LampModel,
+    /// Camera rays see it.
+    pub camera_visible: bool,
+}
+
 /// A light that is not an emissive mesh.
 #[derive(Clone, Debug)]
 pub enum LightDesc {
-    /// Isotropic point light.
+    /// Isotropic point light (a lamp of some radius with `lamp`).
     Point {
         /// Label for messages.
         name: Arc<str>,
@@ -110,6 +129,8 @@ pub enum LightDesc {
         position: Vec3A,
         /// Radiant intensity [W/sr].
         intensity: Rgb,
+        /// Its radius and how it looks, when it is not a point.
+        lamp: Option<LampShape>,
     },
     /// Spot light (KHR_lights_punctual falloff).
     Spot {
@@ -127,8 +148,10 @@ pub enum LightDesc {
         outer_angle: f32,
         /// The fade between the cones.
         curve: SpotCurve,
+        /// Its radius and how it looks, when it is not a point.
+        lamp: Option<LampShape>,
     },
-    /// Directional light.
+    /// Directional light (a sun of some angular size with `angle` > 0).
     Directional {
         /// Label for messages.
         name: Arc<str>,
@@ -136,6 +159,30 @@ pub enum LightDesc {
         direction: Vec3A,
         /// Irradiance perpendicular to the beam [W/m²].
         irradiance: Rgb,
+        /// Angular diameter, radians (0: parallel light).
+        angle: f32,
+        /// Camera rays see the sun (with an angle).
+        camera_visible: bool,
+    },
+    /// A rectangle or ellipse lamp (Blender's area light): one-sided, seen by rays, casting
+    /// no shadow.
+    Area {
+        /// Label for messages.
+        name: Arc<str>,
+        /// Centre.
+        center: Vec3A,
+        /// Half of its first side; it emits towards `u × v`.
+        u: Vec3A,
+        /// Half of its second side.
+        v: Vec3A,
+        /// The ellipse inscribed in the rectangle.
+        ellipse: bool,
+        /// Radiance along its normal [W/(m²·sr)].
+        radiance: Rgb,
+        /// Spread, radians (π: Lambertian).
+        spread: f32,
+        /// Camera rays see it.
+        camera_visible: bool,
     },
     /// Emissive parallelogram `corner + s·edge1 + t·edge2`, front side along `edge1 × edge2`.
     Quad {
@@ -161,40 +208,35 @@ impl LightDesc {
             LightDesc::Point { name, .. }
             | LightDesc::Spot { name, .. }
             | LightDesc::Directional { name, .. }
+            | LightDesc::Area { name, .. }
             | LightDesc::Quad { name, .. } => name,
         }
     }
 
-    /// The light moved by `m` (intensities unchanged).
+    /// The light moved by `m` (intensities and a lamp's radius unchanged, as Cycles keeps a
+    /// lamp's radius whatever its object's scale).
     pub fn transformed(&self, m: &Mat4) -> LightDesc {
         let dir = |d: &Vec3A| m.transform_vector3a(*d).normalize_or_zero();
-        match self {
-            LightDesc::Point { name, position, intensity } => {
-                LightDesc::Point { name: name.clone(), position: m.transform_point3a(*position), intensity: *intensity }
+        let mut moved = self.clone();
+        match &mut moved {
+            LightDesc::Point { position, .. } => *position = m.transform_point3a(*position),
+            LightDesc::Spot { position, direction, .. } => {
+                *position = m.transform_point3a(*position);
+                *direction = dir(direction);
             }
-            LightDesc::Spot { name, position, direction, intensity, inner_angle, outer_angle, curve } => {
-                LightDesc::Spot {
-                    name: name.clone(),
-                    position: m.transform_point3a(*position),
-                    direction: dir(direction),
-                    intensity: *intensity,
-                    inner_angle: *inner_angle,
-                    outer_angle: *outer_angle,
-                    curve: *curve,
-                }
+            LightDesc::Directional { direction, .. } => *direction = dir(direction),
+            LightDesc::Area { center, u, v, .. } => {
+                *center = m.transform_point3a(*center);
+                *u = m.transform_vector3a(*u);
+                *v = m.transform_vector3a(*v);
             }
-            LightDesc::Directional { name, direction, irradiance } => {
-                LightDesc::Directional { name: name.clone(), direction: dir(direction), irradiance: *irradiance }
+            LightDesc::Quad { corner, edge1, edge2, .. } => {
+                *corner = m.transform_point3a(*corner);
+                *edge1 = m.transform_vector3a(*edge1);
+                *edge2 = m.transform_vector3a(*edge2);
             }
-            LightDesc::Quad { name, corner, edge1, edge2, radiance, two_sided } => LightDesc::Quad {
-                name: name.clone(),
-                corner: m.transform_point3a(*corner),
-                edge1: m.transform_vector3a(*edge1),
-                edge2: m.transform_vector3a(*edge2),
-                radiance: *radiance,
-                two_sided: *two_sided,
-            },
         }
+        moved
     }
 }
 

@@ -78,18 +78,53 @@ pub enum EnvironmentSpec {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub enum CameraSpec {
-    /// Pinhole camera with a 1-pixel box filter.
+    /// Perspective camera with a 1-pixel box filter: a pinhole, or with `depth_of_field` a
+    /// thin lens.
     Perspective {
-        /// Position of the pinhole, metres.
+        /// Position of the pinhole (the lens's centre), metres.
         eye: V3,
         /// Point looked at.
         look_at: V3,
         /// Up direction (default +Y).
         #[serde(default = "default_up")]
         up: V3,
-        /// Vertical field of view in degrees.
-        yfov_deg: f32,
+        /// Field of view in degrees along the `fit` dimension (`yfov_deg` is the same).
+        #[serde(alias = "yfov_deg")]
+        fov_deg: f32,
+        /// Which dimension `fov_deg` spans: `Vertical` (the default), `Horizontal`, or `Auto`,
+        /// the larger of width and height (Blender's Auto sensor fit).
+        #[serde(default)]
+        fit: CameraFit,
+        /// Shift of the view as fractions of the fitted dimension's extent, x right and y up
+        /// (Blender's lens shift; default none).
+        #[serde(default)]
+        shift: (f32, f32),
+        /// A thin lens focusing at a distance (default none: everything sharp).
+        depth_of_field: Option<DepthOfField>,
     },
+}
+
+/// Which image dimension a camera's field of view spans.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+pub enum CameraFit {
+    /// The height.
+    #[default]
+    Vertical,
+    /// The width.
+    Horizontal,
+    /// The larger of the two.
+    Auto,
+}
+
+/// A thin lens (Cycles' depth of field).
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DepthOfField {
+    /// Radius of the aperture disk, metres (Blender: focal length / (2 · f-stop), e.g. 50 mm
+    /// at f/2.8: 0.0089).
+    pub aperture_radius: f32,
+    /// Distance along the view axis of the plane in focus, metres.
+    pub focus_distance: f32,
 }
 
 fn default_ior() -> f32 {
@@ -227,18 +262,30 @@ fn default_subdivisions() -> u32 {
     3
 }
 
-/// A light that is not a surface of `objects`.
+/// A light that is not a surface of `objects`. Lamps (a point or spot with a `radius`, an
+/// `Area`, a `Directional` with an `angle_deg`) render as Blender's lights do in Cycles: rays
+/// see them (the camera only where `visible`) but pass through them, and they cast no shadow.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub enum LightSpec {
-    /// Isotropic point light.
+    /// Point light: a point, or with a `radius` a lamp of that size.
     Point {
         /// Position (metres).
         position: V3,
-        /// Radiant intensity in W/sr per channel.
+        /// Radiant intensity in W/sr per channel (a Blender light of power P: P/(4π)).
         intensity: V3,
+        /// Radius of the lamp, metres (default 0: a point).
+        #[serde(default)]
+        radius: f32,
+        /// With a radius: a disk facing each receiver, whose light stays finite close by
+        /// (Blender's Soft Falloff; the default), or else a sphere.
+        #[serde(default = "yes")]
+        soft_falloff: bool,
+        /// With a radius: camera rays see the lamp (default false, as Blender's lights).
+        #[serde(default)]
+        visible: bool,
     },
-    /// Spot light (KHR_lights_punctual falloff between the cones).
+    /// Spot light: full intensity inside the inner cone, dark outside the outer one.
     Spot {
         /// Position (metres).
         position: V3,
@@ -251,6 +298,19 @@ pub enum LightSpec {
         inner_deg: f32,
         /// Outer cone half-angle in degrees (dark outside).
         outer_deg: f32,
+        /// The fade between the cones: `Quadratic` (KHR_lights_punctual's, the default) or
+        /// `Smoothstep` (Blender's spot blend).
+        #[serde(default)]
+        falloff: SpotFalloff,
+        /// Radius of the lamp, metres (default 0: a point).
+        #[serde(default)]
+        radius: f32,
+        /// With a radius: a facing disk (default) or a sphere, as for `Point`.
+        #[serde(default = "yes")]
+        soft_falloff: bool,
+        /// With a radius: camera rays see the lamp (default false).
+        #[serde(default)]
+        visible: bool,
     },
     /// Directional light (sun).
     Directional {
@@ -258,6 +318,36 @@ pub enum LightSpec {
         direction: V3,
         /// Irradiance perpendicular to the beam, W/m² per channel.
         irradiance: V3,
+        /// Angular diameter of the sun in degrees (default 0: parallel light, hard shadows).
+        #[serde(default)]
+        angle_deg: f32,
+        /// With an angle: rays from the camera that leave the scene see the sun's disk
+        /// (default false).
+        #[serde(default)]
+        visible: bool,
+    },
+    /// A one-sided rectangle or ellipse lamp centred at `center`, its sides `u` and `v`
+    /// (full lengths), emitting towards `u × v`: Blender's area light.
+    Area {
+        /// Centre (metres).
+        center: V3,
+        /// First side: its direction and full length.
+        u: V3,
+        /// Second side: its direction and full length.
+        v: V3,
+        /// `Rectangle` (the default) or the `Ellipse` inscribed in it.
+        #[serde(default)]
+        shape: AreaShape,
+        /// Radiance along the normal, W/(m²·sr) per channel (a Blender area light of power P
+        /// and area A: P/(π·A)).
+        radiance: V3,
+        /// Spread in degrees: 180 (the default) is Lambertian; less narrows the beam and
+        /// keeps the power.
+        #[serde(default = "half_turn")]
+        spread_deg: f32,
+        /// Camera rays see the lamp (default false).
+        #[serde(default)]
+        visible: bool,
     },
     /// One emissive parallelogram `corner + s·edge1 + t·edge2`, front along `edge1 × edge2`.
     Quad {
@@ -313,6 +403,34 @@ pub struct GridSpec {
     /// Lamps emit from both faces (default false).
     #[serde(default)]
     pub two_sided: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+fn half_turn() -> f32 {
+    180.0
+}
+
+/// How a spot fades between its cones.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+pub enum SpotFalloff {
+    /// t², KHR_lights_punctual's.
+    #[default]
+    Quadratic,
+    /// t²(3 − 2t), Blender's spot blend.
+    Smoothstep,
+}
+
+/// The shape of an `Area` lamp.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+pub enum AreaShape {
+    /// The rectangle (parallelogram) of its sides.
+    #[default]
+    Rectangle,
+    /// The ellipse inscribed in it.
+    Ellipse,
 }
 
 fn default_fill() -> f32 {

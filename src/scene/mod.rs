@@ -19,8 +19,8 @@ pub use description::SceneDescription;
 use std::time::Duration;
 
 use crate::camera::Camera;
-use crate::geometry::{Geometry, Ray, SurfaceHit};
-use crate::light::Light;
+use crate::geometry::{BoxBvh, Geometry, Ray, SurfaceHit};
+use crate::light::{LampHit, Light};
 use crate::material::{Image, Material};
 use crate::math::Vec3A;
 use crate::sampling::fmix64;
@@ -87,10 +87,56 @@ pub struct Scene {
     /// The environment light's index in `lights`, if there is one: what rays that leave the
     /// scene see.
     pub environment: Option<u32>,
+    /// The lamps: lights with a shape of their own outside the geometry, which rays see along
+    /// their way but which stop nothing.
+    pub lamps: Lamps,
+    /// Suns with an angle, by index in `lights`: rays that leave the scene see them too.
+    pub suns: Vec<u32>,
     /// Centre of the bounding sphere of everything.
     pub center: Vec3A,
     /// Radius of that sphere (sizes directional lights' power).
     pub radius: f32,
+}
+
+/// The lamps of a scene and the BVH over their shapes.
+pub struct Lamps {
+    bvh: BoxBvh,
+    /// The light index of each box.
+    ids: Vec<u32>,
+    /// Whether any lamp is seen by camera rays.
+    camera_visible: bool,
+}
+
+impl Lamps {
+    /// The lamps among `lights` (those with [`Light::lamp_bounds`]).
+    pub fn new(lights: &[Light]) -> Self {
+        let (mut boxes, mut ids) = (Vec::new(), Vec::new());
+        for (i, light) in lights.iter().enumerate() {
+            if let Some(b) = light.lamp_bounds() {
+                boxes.push(b);
+                ids.push(i as u32);
+            }
+        }
+        let camera_visible = ids.iter().any(|&i| lights[i as usize].camera_visible());
+        Self { bvh: BoxBvh::build(&boxes), ids, camera_visible }
+    }
+
+    /// True when the scene has none.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.ids.is_empty()
+    }
+
+    /// Whether camera rays may see some lamp.
+    #[inline]
+    pub fn camera_visible(&self) -> bool {
+        self.camera_visible
+    }
+
+    /// Bytes of the BVH and the index.
+    pub fn memory_bytes(&self) -> usize {
+        self.bvh.memory_bytes() + self.ids.len() * 4
+    }
 }
 
 /// A hash of a ray (its origin and direction bits): rays of different samples, bounces and
@@ -129,6 +175,18 @@ impl Scene {
     #[inline]
     fn cut_out(&self, ray: &Ray, m: u32, uv: crate::math::Vec2) -> bool {
         self.materials[m as usize].is_cut_out(uv, &self.images, hit_number(ray_key(ray), uv))
+    }
+
+    /// Calls `seen(light, hit)` for every lamp `ray` meets before `t_max`, in no particular
+    /// order: a path passes through lamps, taking up the light of each.
+    #[inline]
+    pub fn lamps_along(&self, ray: &Ray, t_max: f32, mut seen: impl FnMut(u32, &LampHit)) {
+        self.lamps.bvh.for_each_candidate(ray, t_max, |i| {
+            let id = self.lamps.ids[i as usize];
+            if let Some(hit) = self.lights[id as usize].intersect_lamp(ray, t_max) {
+                seen(id, &hit);
+            }
+        });
     }
 
     /// Total emitted power (luminance watts) of every light.

@@ -215,7 +215,10 @@ pub fn scene_from(
             target,
             up: if (target - eye).normalize().y.abs() > 0.99 { Vec3A::Z } else { Vec3A::Y },
         },
-        yfov: 0.8,
+        fov: 0.8,
+        fit: Default::default(),
+        shift: Default::default(),
+        lens: None,
         aspect_ratio: None,
     });
     for (i, (mesh, m)) in meshes.into_iter().enumerate() {

@@ -9,6 +9,7 @@ mod display;
 mod docs;
 mod environment;
 mod formats;
+mod lamps;
 mod light_points;
 mod light_samplers;
 mod mutation;

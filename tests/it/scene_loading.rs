@@ -126,3 +126,47 @@ fn shipped_scenes_load() {
         assert!((s.total_power() - 45.24).abs() < 0.01, "{name}: {}", s.total_power());
     }
 }
+
+#[test]
+fn blender_lamps_and_a_thin_lens_load_from_ron_and_bad_ones_are_located() {
+    let text = r#"Scene(
+    camera: Perspective(eye: (0, 1, 3), look_at: (0, 1, 0), fov_deg: 50, fit: Auto, shift: (0.1, -0.05),
+                        depth_of_field: (aperture_radius: 0.01, focus_distance: 3)),
+    lights: [
+        Point(position: (0, 2, 0), intensity: (1, 1, 1), radius: 0.1),
+        Point(position: (1, 2, 0), intensity: (1, 1, 1), radius: 0.1, soft_falloff: false, visible: true),
+        Spot(position: (0, 2, 1), direction: (0, -1, 0), intensity: (5, 5, 5), inner_deg: 20, outer_deg: 30,
+             falloff: Smoothstep, radius: 0.05),
+        Directional(direction: (0, -1, 0), irradiance: (1, 1, 1), angle_deg: 10),
+        Directional(direction: (0, -1, 0), irradiance: (1, 1, 1)),
+        Area(center: (0, 2, 0), u: (0.5, 0, 0), v: (0, 0, 0.3), shape: Ellipse, radiance: (4, 4, 4), spread_deg: 60),
+    ],
+)"#;
+    let (s, _) = built(text, Path::new(".")).unwrap();
+    let kinds: Vec<&str> = s.lights.iter().map(|l| l.kind_name()).collect();
+    assert_eq!(kinds, ["sphere lamp", "sphere lamp", "sphere lamp", "sun", "directional", "area lamp"]);
+    assert!(s.camera.has_lens());
+    assert!(
+        matches!(&s.lights[1], Light::Sphere(l) if l.camera_visible && l.model == myriad::light::LampModel::Sphere)
+    );
+    assert!(!s.lamps.is_empty() && s.lamps.camera_visible() && s.suns == [3]);
+    let fails = |body: &str, needles: &[&str]| {
+        let text =
+            format!("Scene(camera: Perspective(eye: (0, 1, 3), look_at: (0, 1, 0), fov_deg: 50), lights: [{body}])");
+        let Err(e) = built(&text, Path::new(".")) else { panic!("{body} loaded") };
+        let e = e.to_string();
+        assert!(needles.iter().all(|n| e.contains(n)), "{body}: {e}");
+    };
+    fails("Point(position: (0, 2, 0), intensity: (1, 1, 1), radius: -0.1)", &["lights[0] Point", "radius"]);
+    fails("Directional(direction: (0, -1, 0), irradiance: (1, 1, 1), angle_deg: 400)", &["lights[0]", "angle"]);
+    fails("Area(center: (0, 2, 0), u: (1, 0, 0), v: (2, 0, 0), radiance: (1, 1, 1))", &["lights[0] Area", "zero area"]);
+    fails("Area(center: (0, 2, 0), u: (1, 0, 0), v: (0, 0, 1), radiance: (1, 1, 1), shape: Circle)", &["Circle"]);
+    let Err(e) = built(
+        "Scene(camera: Perspective(eye: (0, 1, 3), look_at: (0, 1, 0), fov_deg: 50, depth_of_field: (aperture_radius: 0.1, focus_distance: 0)))",
+        Path::new("."),
+    ) else {
+        panic!("a focus distance of 0 loaded")
+    };
+    let e = e.to_string();
+    assert!(e.contains("focus distance"), "{e}");
+}

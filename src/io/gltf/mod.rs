@@ -27,6 +27,7 @@ use gltf::texture::{MagFilter, WrappingMode};
 
 use super::LoadOptions;
 use super::image_file::from_rgba8;
+use crate::camera::Fit;
 use crate::error::{Error, Result};
 use crate::light::SpotCurve;
 use crate::material::texture::{UvTransform, Wrap};
@@ -446,7 +447,10 @@ impl Loader<'_> {
                     gltf::camera::Projection::Perspective(p) => self.desc.cameras.push(CameraDesc {
                         name: name.clone(),
                         placement: CameraPlacement::Matrix(world),
-                        yfov: p.yfov(),
+                        fov: p.yfov(),
+                        fit: Fit::Vertical,
+                        shift: Vec2::ZERO,
+                        lens: None,
                         aspect_ratio: p.aspect_ratio(),
                     }),
                     gltf::camera::Projection::Orthographic(_) => ortho.push(name.clone()),
@@ -460,7 +464,7 @@ impl Loader<'_> {
                 let power = Rgb::from(light.color()) * (light.intensity() * options.punctual_scale);
                 self.desc.lights.push(match light.kind() {
                     gltf::khr_lights_punctual::Kind::Point => {
-                        LightDesc::Point { name: label, position, intensity: power }
+                        LightDesc::Point { name: label, position, intensity: power, lamp: None }
                     }
                     gltf::khr_lights_punctual::Kind::Spot { inner_cone_angle, outer_cone_angle } => {
                         let (inner_angle, curve) = if self.blender {
@@ -476,11 +480,16 @@ impl Loader<'_> {
                             inner_angle,
                             outer_angle: outer_cone_angle,
                             curve,
+                            lamp: None,
                         }
                     }
-                    gltf::khr_lights_punctual::Kind::Directional => {
-                        LightDesc::Directional { name: label, direction, irradiance: power }
-                    }
+                    gltf::khr_lights_punctual::Kind::Directional => LightDesc::Directional {
+                        name: label,
+                        direction,
+                        irradiance: power,
+                        angle: 0.0,
+                        camera_visible: false,
+                    },
                 });
             }
             stack.extend(node.children().map(|c| (c, world)));

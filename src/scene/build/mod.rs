@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use self::place::{Placement, Placer};
 use super::description::{CameraDesc, CameraPlacement, LightDesc, SceneDescription};
-use super::{Scene, SceneReport, SceneStats};
+use super::{Lamps, Scene, SceneReport, SceneStats};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::geometry::Geometry;
@@ -197,7 +197,9 @@ pub fn build(mut desc: SceneDescription, opts: &BuildOptions) -> Result<(Scene, 
     }
     lights.shrink_to_fit();
     stats.record(&desc, &geometry, &lights, start);
-    let scene = Scene { camera, geometry, materials, images, lights, environment, center, radius };
+    let lamps = Lamps::new(&lights);
+    let suns = (0..lights.len() as u32).filter(|&i| matches!(lights[i as usize], Light::Sun(_))).collect();
+    let scene = Scene { camera, geometry, materials, images, lights, environment, lamps, suns, center, radius };
     let report = SceneReport {
         source: desc.source.clone(),
         camera_name,
@@ -210,7 +212,7 @@ pub fn build(mut desc: SceneDescription, opts: &BuildOptions) -> Result<(Scene, 
     Ok((scene, report))
 }
 
-/// The centre and radius of a sphere around every triangle and positioned light (a unit
+/// The centre and radius of a sphere around every triangle, positioned light and lamp (a unit
 /// sphere at the origin for an empty scene).
 fn bounds(geometry: &Geometry, lights: &[Light]) -> (Vec3A, f32) {
     let (mut lo, mut hi) = (Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN));
@@ -222,6 +224,9 @@ fn bounds(geometry: &Geometry, lights: &[Light]) -> (Vec3A, f32) {
     for l in lights {
         if let Light::Point(PointLight { position, .. }) | Light::Spot(SpotLight { position, .. }) = l {
             (lo, hi) = (lo.min(*position), hi.max(*position));
+        }
+        if let Some((min, max)) = l.lamp_bounds() {
+            (lo, hi) = (lo.min(min), hi.max(max));
         }
     }
     if lo.x <= hi.x { (0.5 * (lo + hi), (0.5 * (hi - lo).length()).max(1e-3)) } else { (Vec3A::ZERO, 1.0) }
@@ -250,9 +255,14 @@ const AUTO_YFOV_DEG: f32 = 40.0;
 /// A scene camera, or an error naming it and saying what is wrong.
 fn scene_camera(file: &str, c: &CameraDesc) -> Result<Camera> {
     match c.placement {
-        CameraPlacement::LookAt { eye, target, up } => Camera::look_at(eye, target, up, c.yfov),
-        CameraPlacement::Matrix(m) => Camera::from_matrix(&m, c.yfov),
+        CameraPlacement::LookAt { eye, target, up } => Camera::look_at(eye, target, up, c.fov),
+        CameraPlacement::Matrix(m) => Camera::from_matrix(&m, c.fov),
     }
+    .and_then(|cam| cam.with_projection(c.fit, c.shift))
+    .and_then(|cam| match c.lens {
+        Some(lens) => cam.with_lens(lens),
+        None => Ok(cam),
+    })
     .map_err(|m| Error::scene(file, format!("camera '{}'", c.name), format!("cannot be used: {m}")))
 }
 
