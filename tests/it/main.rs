@@ -1,6 +1,7 @@
 //! Integration tests, in one binary to keep linking cheap on 2-core CI.
 
 mod bad_input;
+mod blender_addon;
 mod bsdfs;
 mod cli;
 mod common;

@@ -66,7 +66,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<SceneDescription> {
     let mut loader = Loader {
         file: &file,
         buffers: &buffers,
-        blender: generator.starts_with(BLENDER_GENERATOR),
+        blender: generator.starts_with(BLENDER_GENERATOR) || generator.starts_with(ADDON_GENERATOR),
         desc: SceneDescription {
             source: file.clone(),
             inputs: std::iter::once(path.to_path_buf()).chain(external).collect(),
@@ -139,6 +139,10 @@ struct Loader<'a> {
 
 /// The `asset.generator` Blender's glTF exporter writes (followed by its version).
 const BLENDER_GENERATOR: &str = "Khronos glTF Blender I/O";
+
+/// The generator of the files myriad's Blender add-on writes (blender/myriad_blender), which
+/// follow the same Blender conventions.
+const ADDON_GENERATOR: &str = "myriad Blender add-on";
 
 /// A Blender spot's full-intensity half-angle, from the cones its exporter wrote (outer =
 /// spot size / 2, inner = outer·(1 − blend)): Cycles fades by a smoothstep from cos(outer)

@@ -1,0 +1,49 @@
+"""The render settings a scene keeps for myriad: `scene.myriad`."""
+
+import bpy
+
+# The light samplers of `myriad render --sampler`, in its order, and its default.
+SAMPLERS = [
+    ("cells", "cells", "Per-region light tables (8 to 1024 lights), the tree elsewhere: the default"),
+    ("tree", "tree", "A light tree: per-point weighting at any light count"),
+    ("learned", "learned", "The tree, learning which lights are blocked: interiors lit from other rooms"),
+    ("power", "power", "By emitted power"),
+    ("uniform", "uniform", "Every light alike"),
+    ("local", "local", "Every light weighed at every point: O(n), small scenes only"),
+    ("all", "all", "Every light, one shadow ray each: O(n), small scenes only"),
+]
+
+
+class MyriadSettings(bpy.types.PropertyGroup):
+    """myriad's settings of one scene."""
+
+    samples: bpy.props.IntProperty(
+        name="Samples", description="Samples per pixel", default=64, min=1, soft_max=4096, max=1 << 20
+    )
+    time: bpy.props.FloatProperty(
+        name="Time Limit",
+        description="Render for this many seconds (whole passes) instead of a number of samples; 0: use Samples",
+        default=0.0,
+        min=0.0,
+        soft_max=3600.0,
+        unit="TIME_ABSOLUTE",
+    )
+    sampler: bpy.props.EnumProperty(
+        name="Light Sampler", description="How each shading point chooses a light", items=SAMPLERS, default="cells"
+    )
+    max_depth: bpy.props.IntProperty(
+        name="Max Depth",
+        description="Most scattering events on a path (Cycles' Max Bounces + 1; 1 is direct light only)",
+        default=9,
+        min=1,
+        max=1024,
+    )
+    seed: bpy.props.IntProperty(
+        name="Seed", description="Seed of every random number: the same seed gives the same image", default=0, min=0
+    )
+    binary: bpy.props.StringProperty(
+        name="Executable",
+        description="The myriad program; empty: MYRIAD_BIN, else `myriad` on the PATH",
+        default="",
+        subtype="FILE_PATH",
+    )
