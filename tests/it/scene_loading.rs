@@ -170,3 +170,39 @@ fn blender_lamps_and_a_thin_lens_load_from_ron_and_bad_ones_are_located() {
     let e = e.to_string();
     assert!(e.contains("focus distance"), "{e}");
 }
+
+#[test]
+fn a_gltf_lights_extras_give_it_a_radius_or_an_angle() {
+    // Blender's exporter writes a light's custom properties as its extras.
+    let gltf = r#"{"asset": {"version": "2.0"}, "extensionsUsed": ["KHR_lights_punctual"],
+      "extensions": {"KHR_lights_punctual": {"lights": [
+        {"type": "point", "intensity": 683, "extras": {"radius": 0.2}},
+        {"type": "point", "intensity": 683, "extras": {"radius": 0.2, "soft_falloff": false}},
+        {"type": "directional", "intensity": 683, "extras": {"angle": 0.1}},
+        {"type": "point", "intensity": 683, "extras": {"radius": "big"}},
+        {"type": "point", "intensity": 683, "extras": {"note": "someone else's"}}]}},
+      "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}],
+      "nodes": [{"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [0, 2, 0]},
+                {"extensions": {"KHR_lights_punctual": {"light": 1}}, "translation": [1, 2, 0]},
+                {"extensions": {"KHR_lights_punctual": {"light": 2}}},
+                {"extensions": {"KHR_lights_punctual": {"light": 3}}},
+                {"extensions": {"KHR_lights_punctual": {"light": 4}}},
+                {"camera": 0, "translation": [0, 1, 5]}],
+      "scenes": [{"nodes": [0, 1, 2, 3, 4, 5]}]}"#;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("lamps.gltf");
+    std::fs::write(&path, gltf).unwrap();
+    let loaded = load_scene(Some(&path), &Default::default()).unwrap();
+    let mut kinds: Vec<&str> = loaded.scene.lights.iter().map(|l| l.kind_name()).collect();
+    kinds.sort();
+    assert_eq!(kinds, ["point", "point", "sphere lamp", "sphere lamp", "sun"]);
+    let sphere =
+        |l: &Light| matches!(l, Light::Sphere(s) if s.model == myriad::light::LampModel::Sphere && s.radius == 0.2);
+    assert_eq!(loaded.scene.lights.iter().filter(|l| sphere(l)).count(), 1);
+    assert!(
+        loaded.report.warnings.iter().any(|w| w.contains("radius or angle is not a number")),
+        "{:?}",
+        loaded.report.warnings
+    );
+    assert_eq!(loaded.report.warnings.iter().filter(|w| w.contains("extras")).count(), 1);
+}

@@ -29,7 +29,7 @@ use super::LoadOptions;
 use super::image_file::from_rgba8;
 use crate::camera::Fit;
 use crate::error::{Error, Result};
-use crate::light::SpotCurve;
+use crate::light::{LampModel, SpotCurve};
 use crate::material::texture::{UvTransform, Wrap};
 use crate::material::{AlphaMode, Image, Material, TextureRef};
 use crate::math::{Mat4, Rgb, Vec2, Vec3A};
@@ -137,6 +137,26 @@ struct Loader<'a> {
     blender: bool,
 }
 
+/// A light's size where its `extras` give one (what glTF's punctual lights cannot say:
+/// Blender's exporter writes a light's custom properties there, so a `radius` or an `angle`
+/// added in Blender reaches myriad): `radius` (metres) of a point or spot, `soft_falloff`
+/// (default true), `angle` (radians, Blender's) of a sun.
+#[derive(Clone, Copy, Debug, Default, serde::Deserialize)]
+struct LightExtras {
+    radius: Option<f32>,
+    soft_falloff: Option<bool>,
+    angle: Option<f32>,
+}
+
+impl LightExtras {
+    /// The lamp shape of a point or spot with a radius.
+    fn lamp(&self) -> Option<crate::scene::description::LampShape> {
+        let radius = self.radius.filter(|r| *r != 0.0)?;
+        let model = if self.soft_falloff.unwrap_or(true) { LampModel::FacingDisk } else { LampModel::Sphere };
+        Some(crate::scene::description::LampShape { radius, model, camera_visible: false })
+    }
+}
+
 /// The `asset.generator` Blender's glTF exporter writes (followed by its version).
 const BLENDER_GENERATOR: &str = "Khronos glTF Blender I/O";
 
@@ -159,6 +179,20 @@ type ImageMap = Vec<Option<u32>>;
 impl Loader<'_> {
     fn warn(&mut self, message: String) {
         self.desc.warnings.push(format!("{}: {message}", self.file));
+    }
+
+    /// A light's size from its `extras` ([`LightExtras`]); extras of another shape are
+    /// someone else's and are left alone, with a warning when they name a size wrongly.
+    fn light_size(&mut self, label: &str, extras: &gltf::json::extras::Extras) -> LightExtras {
+        let Some(raw) = extras.as_ref() else { return LightExtras::default() };
+        match serde_json::from_str::<LightExtras>(raw.get()) {
+            Ok(size) => size,
+            Err(e) if raw.get().contains("\"radius\"") || raw.get().contains("\"angle\"") => {
+                self.warn(format!("light '{label}': its extras' radius or angle is not a number ({e}); ignored"));
+                LightExtras::default()
+            }
+            Err(_) => LightExtras::default(),
+        }
     }
 
     fn err(&self, location: impl Into<String>, message: impl Into<String>) -> Error {
@@ -466,9 +500,10 @@ impl Loader<'_> {
                 let position = Vec3A::from(world.w_axis.truncate());
                 let direction = (-Vec3A::from(world.z_axis.truncate())).normalize_or_zero();
                 let power = Rgb::from(light.color()) * (light.intensity() * options.punctual_scale);
+                let size = self.light_size(&label, light.extras());
                 self.desc.lights.push(match light.kind() {
                     gltf::khr_lights_punctual::Kind::Point => {
-                        LightDesc::Point { name: label, position, intensity: power, lamp: None }
+                        LightDesc::Point { name: label, position, intensity: power, lamp: size.lamp() }
                     }
                     gltf::khr_lights_punctual::Kind::Spot { inner_cone_angle, outer_cone_angle } => {
                         let (inner_angle, curve) = if self.blender {
@@ -484,14 +519,14 @@ impl Loader<'_> {
                             inner_angle,
                             outer_angle: outer_cone_angle,
                             curve,
-                            lamp: None,
+                            lamp: size.lamp(),
                         }
                     }
                     gltf::khr_lights_punctual::Kind::Directional => LightDesc::Directional {
                         name: label,
                         direction,
                         irradiance: power,
-                        angle: 0.0,
+                        angle: size.angle.unwrap_or(0.0),
                         camera_visible: false,
                     },
                 });
