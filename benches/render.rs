@@ -13,7 +13,9 @@ use std::path::Path;
 
 fn scene(name: &str, res: UVec2) -> myriad::scene::Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
-    load_scene(Some(&path), &BuildOptions { resolution: Some(res), camera: None }.into()).unwrap().scene
+    load_scene(Some(&path), &BuildOptions { resolution: Some(res), camera: None, ..Default::default() }.into())
+        .unwrap()
+        .scene
 }
 
 fn bench(c: &mut Criterion) {

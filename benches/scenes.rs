@@ -9,14 +9,18 @@
 //! - `trace_cornell`: incoherent secondary rays inside `cornell-9x9.ron` (random origins in
 //!   the box, directions uniform over the sphere) through myriad's `Scene::intersect` /
 //!   `occluded` and, on the same triangles and rays, through obvhs alone (its CWBVH and
-//!   triangle test, as its examples use them): the gap is myriad's own overhead.
+//!   triangle test, as its examples use them): the gap is myriad's own overhead;
+//! - `rays`: each tracer this build has (built-in, Embree) on the rays a render traces in
+//!   `lobby.glb` and `cornell_grid_7.glb` (tests/data/blender): camera rays (closest hit),
+//!   bounce rays from the camera's hits in cosine-distributed directions (closest hit) and
+//!   shadow rays from them to a point on a light (any hit), 320 × 240 of each.
 //!
 //! The generated files stay in `target/bench-scenes/` for use with `myriad info` and
 //! `myriad render`.
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use myriad::commands::load_scene;
-use myriad::geometry::Ray;
+use myriad::geometry::{Ray, TracerKind, offset_ray_origin};
 use myriad::math::{UVec2, Vec3A};
 use myriad::sampling::{Dim, SampleStream};
 use myriad::scene::{BuildOptions, Scene};
@@ -147,7 +151,7 @@ fn load(path: &Path) -> Scene {
 }
 
 fn load_report(path: &Path) -> myriad::commands::LoadedScene {
-    let options = BuildOptions { resolution: Some(UVec2::new(64, 48)), camera: None };
+    let options = BuildOptions { resolution: Some(UVec2::new(64, 48)), camera: None, ..Default::default() };
     load_scene(Some(path), &options.into()).unwrap()
 }
 
@@ -165,7 +169,7 @@ fn bvh_build(c: &mut Criterion) {
     group.sample_size(10);
     for n in [100_000usize, 1_000_000] {
         let desc = myriad::io::load_scene(&surface(n, false), &Default::default()).unwrap();
-        let options = BuildOptions { resolution: Some(UVec2::new(64, 48)), camera: None };
+        let options = BuildOptions { resolution: Some(UVec2::new(64, 48)), camera: None, ..Default::default() };
         group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
             b.iter(|| myriad::scene::build(desc.clone(), &options).unwrap().1.stats.bvh_build_time)
         });
@@ -261,5 +265,63 @@ fn trace_cornell(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, gltf_load, bvh_build, trace, trace_cornell);
+/// The rays of one pass of a render of `scene`: camera rays; for each camera hit a bounce ray
+/// (cosine-distributed about the normal, on the side the camera sees) and a shadow ray
+/// (to a point on a light picked uniformly), with the distance it must stay clear.
+fn render_rays(scene: &Scene, resolution: UVec2) -> (Vec<Ray>, Vec<Ray>, Vec<(Ray, f32)>) {
+    let (mut camera, mut bounce, mut shadow) = (Vec::new(), Vec::new(), Vec::new());
+    for y in 0..resolution.y {
+        for x in 0..resolution.x {
+            let s = SampleStream::new(17, (y * resolution.x + x) as u64, 0);
+            let ray = scene.camera.ray(UVec2::new(x, y), resolution, s.get_2d(0, Dim::PixelJitter, 0));
+            camera.push(ray);
+            let Some(hit) = scene.intersect(&ray, f32::INFINITY) else { continue };
+            let n = if hit.n_geom.dot(ray.dir) < 0.0 { hit.n_geom } else { -hit.n_geom };
+            let origin = offset_ray_origin(hit.p, n);
+            let u = s.get_2d(1, Dim::BsdfDirection, 0);
+            let (r, phi) = (u.x.sqrt(), std::f32::consts::TAU * u.y);
+            let (t, b) = n.any_orthonormal_pair();
+            let d = t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u.x).max(0.0).sqrt();
+            bounce.push(Ray::new(origin, d));
+            let light = (s.get_1d(1, Dim::LightSelect, 0) * scene.lights.len() as f32) as usize;
+            let u = s.get_2d_u64(1, Dim::LightPoint, 0);
+            if let Some(ls) = scene.lights.get(light).and_then(|l| l.sample_li(hit.p, u, &scene.images)) {
+                if ls.distance.is_finite() {
+                    shadow.push((Ray::new(origin, ls.p - origin), 0.999));
+                } else {
+                    shadow.push((Ray::new(origin, ls.wi), f32::INFINITY));
+                }
+            }
+        }
+    }
+    (camera, bounce, shadow)
+}
+
+fn rays_per_tracer(c: &mut Criterion) {
+    let resolution = UVec2::new(320, 240);
+    let mut group = c.benchmark_group("rays");
+    group.sample_size(10);
+    for name in ["lobby", "cornell_grid_7"] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/data/blender/{name}.glb"));
+        for &tracer in TracerKind::BUILT {
+            let options = BuildOptions { resolution: Some(resolution), camera: None, tracer };
+            let scene = load_scene(Some(&path), &options.into()).unwrap().scene;
+            let (camera, bounce, shadow) = render_rays(&scene, resolution);
+            let label = |kind: &str| format!("{name} {kind} {}", tracer.name());
+            for (kind, rays) in [("camera", &camera), ("bounce", &bounce)] {
+                group.throughput(Throughput::Elements(rays.len() as u64));
+                group.bench_function(label(kind), |b| {
+                    b.iter(|| rays.iter().filter(|r| scene.intersect(r, f32::INFINITY).is_some()).count())
+                });
+            }
+            group.throughput(Throughput::Elements(shadow.len() as u64));
+            group.bench_function(label("shadow"), |b| {
+                b.iter(|| shadow.iter().filter(|(r, t)| scene.occluded(r, *t)).count())
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, gltf_load, bvh_build, trace, trace_cornell, rays_per_tracer);
 criterion_main!(benches);

@@ -15,7 +15,7 @@
 //! use myriad::math::UVec2;
 //!
 //! // The built-in Cornell box, tiny and quick.
-//! let opts = BuildOptions { resolution: Some(UVec2::new(16, 12)), camera: None };
+//! let opts = BuildOptions { resolution: Some(UVec2::new(16, 12)), camera: None, ..Default::default() };
 //! let scene = commands::load_scene(None, &opts.clone().into()).unwrap().scene;
 //! let strategy = LightStrategy::build(LightSamplerKind::Power, &scene.lights, scene.center, scene.radius);
 //! let settings = render::RenderSettings {

@@ -11,6 +11,7 @@ use myriad::commands::diff::diff;
 use myriad::commands::settings::RenderRequest;
 use myriad::commands::{self, SceneOptions, info::info, render::RenderOptions};
 use myriad::film::AovSet;
+use myriad::geometry::TracerKind;
 use myriad::io::LoadOptions;
 use myriad::math::UVec2;
 use myriad::scene::{BuildOptions, MAX_RESOLUTION};
@@ -39,6 +40,11 @@ struct Cli {
     /// a file someone wanted kept, and myriad refuses to replace it).
     #[arg(long, global = true)]
     force: bool,
+    /// Ray tracer: embree (Intel Embree, where this myriad was built with it: the fastest
+    /// here), builtin (myriad's own), best (embree if built, else builtin). Images agree up
+    /// to the last bits of hit points [default: MYRIAD_TRACER, else best].
+    #[arg(long, global = true, value_parser = parse_tracer)]
+    tracer: Option<TracerKind>,
 }
 
 #[derive(Subcommand)]
@@ -461,6 +467,10 @@ fn parse_exposure(s: &str) -> Result<f32, String> {
     if v.is_finite() && v.abs() <= 64.0 { Ok(v) } else { Err("the exposure must be between -64 and 64 stops".into()) }
 }
 
+fn parse_tracer(s: &str) -> Result<TracerKind, String> {
+    TracerKind::parse(s).ok_or_else(|| format!("'{s}' is no tracer; use best, builtin or embree"))
+}
+
 fn parse_gigabytes(s: &str) -> Result<u64, String> {
     myriad::limits::parse_gb(s).ok_or_else(|| format!("'{s}' is not a positive number of gigabytes"))
 }
@@ -474,6 +484,10 @@ fn run(cli: Cli) -> myriad::Result<ExitCode> {
         myriad::limits::check_memory_env().map_err(myriad::Error::Usage)?;
     }
     myriad::io::replace_read_only(cli.force);
+    match cli.tracer {
+        Some(t) => t.choose_for_process(),
+        None => drop(TracerKind::from_env().map_err(myriad::Error::Usage)?),
+    }
     if let Some(n) = cli.threads {
         rayon::ThreadPoolBuilder::new()
             .num_threads(n as usize)
@@ -521,7 +535,10 @@ fn run(cli: Cli) -> myriad::Result<ExitCode> {
             say(diff(&myriad::commands::diff::DiffOptions { image, reference, error_png: out, html })?)
         }
         Command::Info { scene, camera, load } => {
-            let options = SceneOptions { load: load.options(), build: BuildOptions { resolution: None, camera } };
+            let options = SceneOptions {
+                load: load.options(),
+                build: BuildOptions { resolution: None, camera, ..Default::default() },
+            };
             say(info(scene.as_deref(), &options)?);
         }
     }

@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use crate::film::{AovSet, Film};
-use crate::integrator::{RayCounters, Tally, path};
+use crate::integrator::{RayCounters, Tally, path, timing};
 use crate::interrupt::{self, Stop};
 use crate::learning::{LEARN_UNTIL, Learning, Seen};
 use crate::light_sampler::{LearnedStats, LightStrategy};
@@ -250,7 +250,13 @@ fn render_pass(pass: &Pass, film: &mut Film, recording: &Seen, watch: Watch) -> 
                     } else {
                         scene.camera.ray(pixel, size, jitter)
                     };
+                    let timing = timing::is_timed(index as u64, s as u64);
+                    tally.rays.timing = timing;
+                    let start = if timing { timing::ticks() } else { 0 };
                     let smp = path::radiance(scene, strategy, ray, &stream, settings.max_depth, &mut tally);
+                    if timing {
+                        tally.rays.time.total += timing::ticks().wrapping_sub(start);
+                    }
                     if smp.radiance.is_finite() {
                         px.add(smp.radiance);
                     } else {

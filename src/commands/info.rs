@@ -72,7 +72,13 @@ impl fmt::Display for InfoReport {
         )?;
         writeln!(f, "total power  {:.4} W (luminance)", s.total_power())?;
         writeln!(f, "load         {}", human_duration(self.loaded.load_time))?;
-        writeln!(f, "build        {} (BVH {})", human_duration(st.build_time), human_duration(st.bvh_build_time))?;
+        writeln!(
+            f,
+            "build        {} (BVH {} for the {} tracer)",
+            human_duration(st.build_time),
+            human_duration(st.bvh_build_time),
+            st.tracer
+        )?;
         let per_tri = st.geometry_bytes as f64 / st.triangles.max(1) as f64;
         let per_light = st.light_bytes as f64 / s.lights.len().max(1) as f64;
         writeln!(

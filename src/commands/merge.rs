@@ -136,6 +136,7 @@ fn difference(a: &PartHeader, b: &PartHeader) -> String {
         ("myriad", a.myriad.clone(), b.myriad.clone()),
         ("scene contents", a.scene_hash.clone(), b.scene_hash.clone()),
         ("sampler", a.sampler.clone(), b.sampler.clone()),
+        ("tracer", a.tracer.clone(), b.tracer.clone()),
         ("seed", a.seed.to_string(), b.seed.to_string()),
         ("max depth", a.max_depth.to_string(), b.max_depth.to_string()),
         ("resolution", format!("{:?}", a.resolution), format!("{:?}", b.resolution)),
@@ -149,7 +150,8 @@ fn difference(a: &PartHeader, b: &PartHeader) -> String {
 /// Writes the merged image (EXR with the provenance a render writes, and the preview).
 fn write_merged(opts: &MergeOptions, header: &PartHeader, film: &Film, png: Option<PathBuf>) -> Result<Vec<PathBuf>> {
     let h = header;
-    let mut meta = super::provenance::image_provenance(&h.scene, &h.sampler, film.spp(), h.seed, h.max_depth);
+    let mut meta =
+        super::provenance::image_provenance(&h.scene, &h.sampler, &h.tracer, film.spp(), h.seed, h.max_depth);
     meta.push(("myriad.samples".into(), format!("{}..{}", h.samples[0], h.samples[1])));
     meta.push(("myriad.parts_revision".into(), h.myriad.clone()));
     crate::io::exr::write(&opts.output, &film.layers(h.aov_set()), &meta)?;

@@ -16,13 +16,21 @@ use crate::render::{RenderSettings, RenderStats};
 use crate::settings::LightSamplerKind;
 
 /// Header attributes recording how an image was made: this myriad's version and git
-/// revision, the scene, the sampler, spp, seed and depth.
-pub fn image_provenance(scene: &str, sampler: &str, spp: u32, seed: u64, max_depth: u32) -> Vec<(String, String)> {
+/// revision, the scene, the sampler, the ray tracer, spp, seed and depth.
+pub fn image_provenance(
+    scene: &str,
+    sampler: &str,
+    tracer: &str,
+    spp: u32,
+    seed: u64,
+    max_depth: u32,
+) -> Vec<(String, String)> {
     [
         ("myriad.version", env!("CARGO_PKG_VERSION").to_string()),
         ("myriad.git_revision", env!("MYRIAD_GIT_REVISION").to_string()),
         ("myriad.scene", scene.to_string()),
         ("myriad.sampler", sampler.to_string()),
+        ("myriad.tracer", tracer.to_string()),
         ("myriad.spp", spp.to_string()),
         ("myriad.seed", seed.to_string()),
         ("myriad.max_depth", max_depth.to_string()),
@@ -32,14 +40,16 @@ pub fn image_provenance(scene: &str, sampler: &str, spp: u32, seed: u64, max_dep
     .collect()
 }
 
-/// A render's [`image_provenance`] and its render time.
+/// A render's [`image_provenance`] and its render time; `tracer`: the scene's
+/// (`SceneStats::tracer`).
 pub fn provenance(
     scene: &str,
     sampler: LightSamplerKind,
+    tracer: &str,
     settings: &RenderSettings,
     stats: &RenderStats,
 ) -> Vec<(String, String)> {
-    let mut meta = image_provenance(scene, sampler.name(), stats.spp, settings.seed, settings.max_depth);
+    let mut meta = image_provenance(scene, sampler.name(), tracer, stats.spp, settings.seed, settings.max_depth);
     meta.push(("myriad.render_seconds".into(), format!("{:.6}", stats.elapsed.as_secs_f64())));
     meta
 }
@@ -69,11 +79,12 @@ pub fn scene_fingerprint(loaded: &LoadedScene, options: &SceneOptions) -> Result
     Ok(key.finish())
 }
 
-/// The header of the part a render of samples `samples` wrote.
+/// The header of the part a render of samples `samples` wrote with `tracer`.
 pub fn part_header(
     scene: &str,
     scene_hash: String,
     sampler: LightSamplerKind,
+    tracer: &str,
     settings: &RenderSettings,
     samples: (u32, u32),
     stats: &RenderStats,
@@ -83,6 +94,7 @@ pub fn part_header(
         scene: scene.to_string(),
         scene_hash,
         sampler: sampler.name().to_string(),
+        tracer: tracer.to_string(),
         seed: settings.seed,
         max_depth: settings.max_depth,
         resolution: settings.resolution.to_array(),

@@ -11,6 +11,7 @@ use super::settings::{DEFAULT_SPP, RenderRequest};
 use super::{DEFAULT_SCENE_NAME, LoadedScene, SceneOptions, human_duration, human_rate, load_scene};
 use crate::error::{Error, Result};
 use crate::film::AovSet;
+use crate::integrator::timing::{PhaseTimes, TIMED_ONE_IN};
 use crate::interrupt::Stop;
 use crate::light_sampler::LightStrategy;
 use crate::limits::human_bytes;
@@ -78,7 +79,7 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
     let outputs = Outputs::plan(opts)?;
     let scene_options = SceneOptions {
         load: opts.load,
-        build: BuildOptions { resolution: opts.resolution, camera: opts.camera.clone() },
+        build: BuildOptions { resolution: opts.resolution, camera: opts.camera.clone(), ..Default::default() },
     };
     let loaded = load_scene(opts.scene.as_deref(), &scene_options)?;
     let resolved = opts.settings.resolve(&loaded.report.render, DEFAULT_SPP)?;
@@ -188,6 +189,7 @@ impl Outputs {
                 made.scene_name,
                 hash,
                 made.sampler,
+                made.loaded.report.stats.tracer,
                 made.settings,
                 range,
                 &output.stats,
@@ -195,7 +197,13 @@ impl Outputs {
             crate::io::part::write(&path, &header, &output.film)?;
             written.push(path);
         } else {
-            let meta = super::provenance::provenance(made.scene_name, made.sampler, made.settings, &output.stats);
+            let meta = super::provenance::provenance(
+                made.scene_name,
+                made.sampler,
+                made.loaded.report.stats.tracer,
+                made.settings,
+                &output.stats,
+            );
             crate::io::exr::write(&opts.output, &output.film.layers(made.settings.aovs), &meta)?;
             written.push(opts.output.clone());
         }
@@ -225,6 +233,23 @@ fn paths(ps: &[PathBuf]) -> String {
     ps.iter().map(|p: &PathBuf| Path::display(p).to_string()).collect::<Vec<_>>().join(", ")
 }
 
+/// Where the timed paths spent their time, and the tracer's speed per thread by kind of ray.
+fn write_time_shares(f: &mut fmt::Formatter<'_>, time: &PhaseTimes) -> fmt::Result {
+    let Some([trace, choice, rest]) = time.shares() else { return Ok(()) };
+    let (closest, shadow) = time.rays_per_second();
+    let rate = |r: Option<f64>| r.map_or("-".into(), |r| format!("{}rays/s", human_rate(r)));
+    writeln!(
+        f,
+        "time       tracing {:.0} % (camera+bounce {}, shadow {} per thread), light choice {:.0} %, \
+         shading and the rest {:.0} % (on 1 in {TIMED_ONE_IN} paths)",
+        100.0 * trace,
+        rate(closest),
+        rate(shadow),
+        100.0 * choice,
+        100.0 * rest
+    )
+}
+
 impl fmt::Display for RenderReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let (s, r) = (&self.loaded.scene, &self.loaded.report);
@@ -241,10 +266,11 @@ impl fmt::Display for RenderReport {
         )?;
         writeln!(
             f,
-            "prepare    load {}, build {} (BVH {}), sampler {} built in {} ({})",
+            "prepare    load {}, build {} (BVH {}, {} tracer), sampler {} built in {} ({})",
             human_duration(self.loaded.load_time),
             human_duration(r.stats.build_time),
             human_duration(r.stats.bvh_build_time),
+            r.stats.tracer,
             self.label,
             human_duration(self.sampler_build_time),
             human_bytes(self.sampler_bytes as u64)
@@ -269,6 +295,7 @@ impl fmt::Display for RenderReport {
             st.rays.rays,
             st.rays.shadow_rays
         )?;
+        write_time_shares(f, &st.rays.time)?;
         if self.sampler == LightSamplerKind::Cells && self.cells.is_none() && !s.lights.is_empty() {
             let lights = self.loaded.scene.lights.len();
             let chose = if lights <= crate::light_sampler::EVERY_LIGHT_UP_TO {

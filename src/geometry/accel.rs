@@ -51,10 +51,87 @@ fn obvhs_ray(o: Vec3A, d: Vec3A, t_max: f32) -> obvhs::ray::Ray {
     obvhs::ray::Ray::new(o, d + Vec3A::ZERO, 0.0, t_max)
 }
 
-/// A bottom-level BVH and its triangles in BVH order.
+/// Which ray tracer answers the scene's ray queries.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TracerKind {
+    /// Intel Embree 3 where this build has it (`cfg(embree)`), else the built-in one.
+    Best,
+    /// myriad's own: obvhs's compressed 8-wide BVH with an AVX2 node and leaf test.
+    Builtin,
+    /// Intel Embree 3 (the system library).
+    Embree,
+}
+
+/// Stored triangles from which `best` traces with Embree. Measured (benches/scenes.rs `rays`
+/// and `trace`, whole renders): on real scenes of 2 k to 21 k triangles the two tracers are
+/// within ±12 % of each other either way (the built-in one's closest hits are faster there,
+/// Embree's shadow rays), from 10⁵ triangles Embree traces 2× to 4× as many rays per second.
+pub const EMBREE_FROM: usize = 50_000;
+
+/// The process's choice (`--tracer`), 0 while unset.
+static CHOSEN: std::sync::atomic::AtomicU8 = std::sync::atomic::AtomicU8::new(0);
+
+impl TracerKind {
+    const ALL: [Self; 3] = [Self::Best, Self::Builtin, Self::Embree];
+
+    /// The tracers this build can trace with.
+    pub const BUILT: &[Self] = if cfg!(embree) { &[Self::Builtin, Self::Embree] } else { &[Self::Builtin] };
+
+    /// The tracer `--tracer` or MYRIAD_TRACER names (`builtin`, `embree`, `best`).
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|t| t.name() == name)
+    }
+
+    /// Makes `self` the tracer of every scene built afterwards without one named (`--tracer`).
+    pub fn choose_for_process(self) {
+        let index = Self::ALL.iter().position(|&t| t == self).unwrap_or(0);
+        CHOSEN.store(index as u8 + 1, std::sync::atomic::Ordering::Relaxed);
+    }
+
+    /// The tracer MYRIAD_TRACER names, if set; an error naming the choices if it names none.
+    pub fn from_env() -> Result<Option<Self>, String> {
+        let Ok(value) = std::env::var("MYRIAD_TRACER") else { return Ok(None) };
+        Self::parse(&value)
+            .map(Some)
+            .ok_or_else(|| format!("MYRIAD_TRACER={value} names no tracer; use best, builtin or embree"))
+    }
+
+    /// Its name in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Best => "best",
+            Self::Builtin => "builtin",
+            Self::Embree => "embree",
+        }
+    }
+
+    /// What `Best` means for a scene of `stored` triangles in this build: Embree from
+    /// [`EMBREE_FROM`] triangles up, the built-in tracer below (docs/performance.md).
+    pub fn resolve(self, stored: usize) -> Self {
+        match self {
+            Self::Best if cfg!(embree) && stored >= EMBREE_FROM => Self::Embree,
+            Self::Best => Self::Builtin,
+            t => t,
+        }
+    }
+}
+
+impl Default for TracerKind {
+    /// `--tracer`'s choice, else MYRIAD_TRACER's, else the best.
+    fn default() -> Self {
+        match CHOSEN.load(std::sync::atomic::Ordering::Relaxed) {
+            0 => Self::from_env().ok().flatten().unwrap_or(Self::Best),
+            n => Self::ALL[n as usize - 1],
+        }
+    }
+}
+
+/// A bottom-level BVH and its triangles: in BVH order for the built-in tracer (nine
+/// coordinate planes), as they came for Embree (three corners each, which Embree reads).
 pub struct Blas {
     bvh: Option<CwBvh>,
     tris: Triangles,
+    corners: Vec<Vec3A>,
 }
 
 impl Blas {
@@ -62,30 +139,40 @@ impl Blas {
     /// permutation `order[new] = old`.
     pub fn build(tris: Vec<[Vec3A; 3]>) -> (Self, Vec<u32>) {
         if tris.is_empty() {
-            return (Self { bvh: None, tris: Triangles::new(&[]) }, Vec::new());
+            return (Self { bvh: None, tris: Triangles::new(&[]), corners: Vec::new() }, Vec::new());
         }
         let prims: Vec<Triangle> = tris.iter().map(|&[v0, v1, v2]| Triangle { v0, v1, v2 }).collect();
         let bvh = build_cwbvh_from_tris(&prims, BvhBuildParams::medium_build(), &mut Duration::default());
         drop(prims);
         let order = bvh.primitive_indices.clone();
         let sorted: Vec<[Vec3A; 3]> = order.iter().map(|&i| tris[i as usize]).collect();
-        (Self { bvh: Some(bvh), tris: Triangles::new(&sorted) }, order)
+        (Self { bvh: Some(bvh), tris: Triangles::new(&sorted), corners: Vec::new() }, order)
+    }
+
+    /// The triangles as they are, for Embree to build its own BVH over (no permutation).
+    pub fn corners(tris: &[[Vec3A; 3]]) -> Self {
+        Self { bvh: None, tris: Triangles::new(&[]), corners: tris.as_flattened().to_vec() }
     }
 
     /// Number of triangles.
     pub fn len(&self) -> usize {
-        self.tris.len()
+        self.tris.len() + self.corners.len() / 3
     }
 
     /// True when it holds no triangle.
     pub fn is_empty(&self) -> bool {
-        self.tris.len() == 0
+        self.len() == 0
     }
 
     /// Vertices of triangle `tri` (BVH order), in this BLAS's space.
     #[inline]
     pub fn vertices(&self, tri: u32) -> [Vec3A; 3] {
-        self.tris.vertices(tri)
+        if self.corners.is_empty() {
+            self.tris.vertices(tri)
+        } else {
+            let k = 3 * tri as usize;
+            [self.corners[k], self.corners[k + 1], self.corners[k + 2]]
+        }
     }
 
     fn memory_bytes(&self) -> usize {
@@ -93,10 +180,15 @@ impl Blas {
             .as_ref()
             .map_or(0, |b| b.nodes.len() * std::mem::size_of_val(&b.nodes[0]) + b.primitive_indices.len() * 4)
             + self.tris.memory_bytes()
+            + self.corners.capacity() * std::mem::size_of::<Vec3A>()
     }
 
     fn bounds(&self) -> Aabb {
-        self.bvh.as_ref().map_or(Aabb::empty(), |b| b.total_aabb)
+        let mut b = self.bvh.as_ref().map_or(Aabb::empty(), |b| b.total_aabb);
+        self.corners.iter().for_each(|&c| {
+            b.extend(c);
+        });
+        b
     }
 
     #[inline]
@@ -151,11 +243,14 @@ pub struct AccelStats {
     pub memory_bytes: usize,
 }
 
-/// All BLASes, their instances and (with more than one instance) the TLAS.
+/// All BLASes, their instances and (with more than one instance) the TLAS, or Embree's
+/// scene over the same: the one seam every ray query of the renderer goes through.
 pub struct Accel {
     blases: Vec<Blas>,
     instances: Vec<Instance>,
     tlas: Option<CwBvh>,
+    #[cfg(embree)]
+    embree: Option<super::embree::EmbreeScene>,
     stats: AccelStats,
 }
 
@@ -164,6 +259,46 @@ impl Accel {
     /// placement of a world-space BLAS is detected and kept transform-free) and builds the
     /// TLAS when needed. `build_time` is what the BLAS builds took.
     pub fn new(blases: Vec<Blas>, placements: &[(u32, Mat4)], build_time: Duration) -> Self {
+        Self::place(blases, placements, build_time, false)
+    }
+
+    /// [`Accel::new`] over BLASes of [`Blas::corners`], traced by Embree; `masked[k]`: some
+    /// triangle of block k needs the acceptance test. An error when Embree cannot start or
+    /// build.
+    #[cfg(embree)]
+    pub fn new_embree(
+        blases: Vec<Blas>,
+        placements: &[(u32, Mat4)],
+        masked: &[bool],
+        build_time: Duration,
+    ) -> Result<Self, String> {
+        let start = Instant::now();
+        let mut accel = Self::place(blases, placements, build_time, true);
+        let blocks: Vec<super::embree::BlockTriangles> = accel
+            .blases
+            .iter()
+            .zip(masked)
+            .map(|(b, &masked)| super::embree::BlockTriangles { corners: &b.corners, masked })
+            .collect();
+        let placed: Vec<(u32, Mat4)> = accel.instances.iter().map(|i| (i.blas, i.to_world)).collect();
+        let scene = super::embree::EmbreeScene::build(&blocks, &placed)?;
+        accel.stats.build_time += start.elapsed();
+        accel.stats.memory_bytes += scene.memory_bytes();
+        accel.embree = Some(scene);
+        Ok(accel)
+    }
+
+    /// The tracer answering this one's queries.
+    pub fn tracer(&self) -> TracerKind {
+        #[cfg(embree)]
+        if self.embree.is_some() {
+            return TracerKind::Embree;
+        }
+        TracerKind::Builtin
+    }
+
+    /// The placements (empty BLASes left out) and, unless `embree` traces them, the TLAS.
+    fn place(blases: Vec<Blas>, placements: &[(u32, Mat4)], build_time: Duration, embree: bool) -> Self {
         let start = Instant::now();
         let instances: Vec<Instance> = placements
             .iter()
@@ -191,7 +326,7 @@ impl Accel {
                 }
             })
             .collect();
-        let tlas = (instances.len() > 1)
+        let tlas = (instances.len() > 1 && !embree)
             .then(|| build_cwbvh(&instances, BvhBuildParams::medium_build(), &mut Duration::default()));
         // Direct layout, as for triangles: the TLAS slot is the instance index.
         let instances = match &tlas {
@@ -202,7 +337,14 @@ impl Accel {
             + instances.len() * std::mem::size_of::<Instance>()
             + tlas.as_ref().map_or(0, |t| t.nodes.len() * std::mem::size_of_val(&t.nodes[0]));
         let stats = AccelStats { build_time: build_time + start.elapsed(), memory_bytes };
-        Self { blases, instances, tlas, stats }
+        Self {
+            blases,
+            instances,
+            tlas,
+            #[cfg(embree)]
+            embree: None,
+            stats,
+        }
     }
 
     /// Build statistics.
@@ -233,6 +375,10 @@ impl Accel {
     /// (alpha cut-outs return false and the ray passes through).
     #[inline]
     pub fn closest_hit(&self, ray: &Ray, t_max: f32, accept: impl Fn(u32, u32, f32, f32) -> bool) -> Option<RawHit> {
+        #[cfg(embree)]
+        if let Some(e) = &self.embree {
+            return e.closest_hit(ray, t_max, &accept);
+        }
         let Some(tlas) = &self.tlas else {
             let inst = self.instances.first()?;
             let acc = |tri, b1, b2| accept(inst.blas, tri, b1, b2);
@@ -261,6 +407,10 @@ impl Accel {
     /// True when something `accept` keeps lies on `origin + t·dir`, `t ∈ (0, t_max)`.
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32, accept: impl Fn(u32, u32, f32, f32) -> bool) -> bool {
+        #[cfg(embree)]
+        if let Some(e) = &self.embree {
+            return e.occluded(ray, t_max, &accept);
+        }
         let Some(tlas) = &self.tlas else {
             let Some(inst) = self.instances.first() else { return false };
             let acc = |tri, b1, b2| accept(inst.blas, tri, b1, b2);

@@ -8,7 +8,7 @@
 
 use std::time::Instant;
 
-use super::accel::{Accel, Blas, Instance};
+use super::accel::{Accel, Blas, Instance, TracerKind};
 use super::{Ray, SurfaceHit, TriangleRef};
 use crate::math::{Mat4, Vec2, Vec3A};
 
@@ -131,9 +131,42 @@ impl GeometryBuilder {
         self.placements.push((block, transform));
     }
 
-    /// Builds every BVH (triangles are reordered into BVH order; lights keep their ids).
-    pub fn build(self) -> Geometry {
+    /// Builds every BVH with `tracer` (`best`: see [`TracerKind::resolve`]; the built-in one
+    /// reorders triangles into BVH order, lights keep their ids). Where Embree is asked for
+    /// but this build lacks it or it fails, the built-in tracer takes over and the second value
+    /// says why.
+    pub fn build(self, tracer: TracerKind) -> (Geometry, Option<String>) {
         let start = Instant::now();
+        let masked = self.blocks.iter().flat_map(|b| &b.info).any(|i| i.masked);
+        let tracer = tracer.resolve(self.blocks.iter().map(|b| b.tris.len()).sum());
+        if tracer == TracerKind::Builtin {
+            return (self.build_builtin(start, masked), None);
+        }
+        #[cfg(embree)]
+        {
+            let blocks_masked: Vec<bool> = self.blocks.iter().map(|b| b.info.iter().any(|i| i.masked)).collect();
+            let blases = self.blocks.iter().map(|b| Blas::corners(&b.tris)).collect();
+            match Accel::new_embree(blases, &self.placements, &blocks_masked, start.elapsed()) {
+                Ok(accel) => {
+                    let info = self.blocks.into_iter().map(|b| b.info).collect();
+                    return (Geometry { accel, info, normals: self.normals, uvs: self.uvs, masked }, None);
+                }
+                Err(why) => {
+                    let why = format!("{why}: traced with the built-in tracer instead");
+                    return (self.build_builtin(Instant::now(), masked), Some(why));
+                }
+            }
+        }
+        #[allow(unreachable_code)]
+        let why = (tracer == TracerKind::Embree).then(|| {
+            "this myriad was built without Embree (install it: apt install libembree-dev, then build again): \
+             traced with the built-in tracer"
+                .to_string()
+        });
+        (self.build_builtin(start, masked), why)
+    }
+
+    fn build_builtin(self, start: Instant, masked: bool) -> Geometry {
         let mut blases = Vec::with_capacity(self.blocks.len());
         let mut infos = Vec::with_capacity(self.blocks.len());
         for block in self.blocks {
@@ -142,7 +175,6 @@ impl GeometryBuilder {
             blases.push(blas);
         }
         let accel = Accel::new(blases, &self.placements, start.elapsed());
-        let masked = infos.iter().flatten().any(|i| i.masked);
         Geometry { accel, info: infos, normals: self.normals, uvs: self.uvs, masked }
     }
 }
@@ -302,29 +334,35 @@ mod tests {
     }
 
     #[test]
-    fn shared_meshes_are_stored_once_and_hit_in_world_space() {
-        let mut g = GeometryBuilder::new();
-        let quad = [
-            Vec3A::new(-1.0, -1.0, 0.0),
-            Vec3A::new(1.0, -1.0, 0.0),
-            Vec3A::new(1.0, 1.0, 0.0),
-            Vec3A::new(-1.0, 1.0, 0.0),
-        ];
-        let normals = [Vec3A::Z; 4];
-        let base = g.push_vertices(Some(&normals), None, 4);
-        let attr = Attributes { base, smooth: true, has_uv: false };
-        let block = g.add_shared_mesh(&quad, &[[0, 1, 2], [0, 2, 3]], Some(attr), 7, false);
-        for k in 0..100 {
-            let m = Mat4::from_translation(glam::Vec3::new(0.0, 0.0, -(k as f32) - 1.0)) * Mat4::from_rotation_y(0.3);
-            g.add_instance(block, m);
+    fn shared_meshes_are_stored_once_and_hit_in_world_space_by_every_tracer() {
+        for &tracer in TracerKind::BUILT {
+            let mut g = GeometryBuilder::new();
+            let quad = [
+                Vec3A::new(-1.0, -1.0, 0.0),
+                Vec3A::new(1.0, -1.0, 0.0),
+                Vec3A::new(1.0, 1.0, 0.0),
+                Vec3A::new(-1.0, 1.0, 0.0),
+            ];
+            let normals = [Vec3A::Z; 4];
+            let base = g.push_vertices(Some(&normals), None, 4);
+            let attr = Attributes { base, smooth: true, has_uv: false };
+            let block = g.add_shared_mesh(&quad, &[[0, 1, 2], [0, 2, 3]], Some(attr), 7, false);
+            for k in 0..100 {
+                let m =
+                    Mat4::from_translation(glam::Vec3::new(0.0, 0.0, -(k as f32) - 1.0)) * Mat4::from_rotation_y(0.3);
+                g.add_instance(block, m);
+            }
+            let (geo, warning) = g.build(tracer);
+            assert_eq!((geo.accel.tracer(), warning), (tracer, None));
+            assert_eq!(geo.stored_triangle_count(), 2);
+            assert_eq!(geo.triangle_count(), 200);
+            let ray = Ray::new(Vec3A::new(0.1, 0.2, 0.0), -Vec3A::Z);
+            let hit = geo.intersect(&ray, f32::INFINITY, |_, _| false).unwrap();
+            assert!((hit.p.z + 1.0).abs() < 0.1, "{tracer:?}: {}", hit.p);
+            assert_eq!(hit.material, 7);
+            // The shading normal is rotated with the instance.
+            let n = Vec3A::new(0.3f32.sin(), 0.0, 0.3f32.cos());
+            assert!((hit.n_shading - n).length() < 1e-4, "{tracer:?}: {}", hit.n_shading);
         }
-        let geo = g.build();
-        assert_eq!(geo.stored_triangle_count(), 2);
-        assert_eq!(geo.triangle_count(), 200);
-        let hit = geo.intersect(&Ray::new(Vec3A::new(0.1, 0.2, 0.0), -Vec3A::Z), f32::INFINITY, |_, _| false).unwrap();
-        assert!((hit.p.z + 1.0).abs() < 0.1, "{}", hit.p);
-        assert_eq!(hit.material, 7);
-        // The shading normal is rotated with the instance.
-        assert!((hit.n_shading - Vec3A::new(0.3f32.sin(), 0.0, 0.3f32.cos())).length() < 1e-4, "{}", hit.n_shading);
     }
 }

@@ -7,13 +7,15 @@
 //! lights beyond the ids it stores per triangle.
 
 mod accel;
+#[cfg(embree)]
+mod embree;
 mod hit;
 mod mesh;
 mod offset;
 mod traverse;
 mod triangles;
 
-pub use accel::{Accel, AccelStats, Blas, BoxBvh, Instance, RawHit};
+pub use accel::{Accel, AccelStats, Blas, BoxBvh, Instance, RawHit, TracerKind};
 pub use hit::{SurfaceHit, TriangleRef};
 pub use mesh::{Attributes, Geometry, GeometryBuilder, NO_LIGHT, TriangleInfo};
 pub use offset::offset_ray_origin;

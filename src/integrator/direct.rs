@@ -7,6 +7,7 @@
 //! at diffuse points), every light gets its own point (`Dim::LightPoint`, sub-index = light)
 //! and selection pmf 1. Delta lights get weight 1: BSDF sampling cannot find them.
 
+use super::timing::timed;
 use super::{RayCounters, Tally};
 use crate::geometry::{Ray, offset_ray_origin};
 use crate::light::Light;
@@ -40,12 +41,15 @@ fn light_contribution(
     }
     let origin = sp.ray_origin(p, ls.wi);
     counters.shadow_rays += 1;
-    let occluded = if ls.distance.is_infinite() {
-        scene.occluded(&Ray::new(origin, ls.wi), f32::INFINITY)
-    } else {
-        let target = if ls.n == Vec3A::ZERO { ls.p } else { offset_ray_origin(ls.p, ls.n) };
-        scene.occluded(&Ray::new(origin, target - origin), 1.0)
-    };
+    counters.time.shadow_rays += counters.timing as u64;
+    let occluded = timed(counters.timing, &mut counters.time.shadow, || {
+        if ls.distance.is_infinite() {
+            scene.occluded(&Ray::new(origin, ls.wi), f32::INFINITY)
+        } else {
+            let target = if ls.n == Vec3A::ZERO { ls.p } else { offset_ray_origin(ls.p, ls.n) };
+            scene.occluded(&Ray::new(origin, target - origin), 1.0)
+        }
+    });
     // Only a light on this side of the surface is reached through the volume the point is in;
     // towards the far side the ray leaves it at once.
     let inside = medium != Rgb::ZERO && ls.wi.dot(sp.n_geom) > 0.0;
@@ -88,7 +92,10 @@ pub fn estimate_direct(
             let u_select = stream.get_1d_u64(bounce, Dim::LightSelect, 0);
             let u_point = stream.get_2d_u64(bounce, Dim::LightPoint, 0);
             let ctx = ShadingContext { p, n: sp.selection_normal() };
-            match sampler.sample_prefetching(&ctx, u_select, &scene.lights) {
+            let rays = &mut tally.rays;
+            let choice =
+                timed(rays.timing, &mut rays.time.choice, || sampler.sample_prefetching(&ctx, u_select, &scene.lights));
+            match choice {
                 Some(s) => {
                     debug_assert!(s.pmf > 0.0);
                     let light = &scene.lights[s.light.0 as usize];

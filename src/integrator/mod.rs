@@ -1,12 +1,14 @@
 //! Light transport: unidirectional path tracing with next-event estimation and MIS.
 //!
 //! Owns: the per-path estimator ([`path::radiance`]), next-event estimation for one shading
-//! point ([`direct::estimate_direct`]), and the counters both keep. Depends on scene, material,
+//! point ([`direct::estimate_direct`]), and the counters both keep (with [`timing`], where a
+//! sample of the paths spends its time). Depends on scene, material,
 //! light, light_sampler, learning (what the paths record for whatever learns from them) and
 //! sampling; knows nothing of pixels or threads.
 
 pub mod direct;
 pub mod path;
+pub mod timing;
 
 pub use path::FirstHit;
 
@@ -30,13 +32,18 @@ pub struct Tally {
     pub seen: Seen,
 }
 
-/// Rays traced by one worker, summed at the end of a render (no atomics on the hot path).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// Rays traced by one worker and where the timed paths spent their time, summed at the end
+/// of a render (no atomics on the hot path).
+#[derive(Clone, Copy, Debug, Default)]
 pub struct RayCounters {
     /// Closest-hit rays (camera and bounce rays).
     pub rays: u64,
     /// Occlusion (shadow) rays.
     pub shadow_rays: u64,
+    /// Ticks per phase of the timed paths.
+    pub time: timing::PhaseTimes,
+    /// Whether the path being traced is timed ([`timing::is_timed`]).
+    pub timing: bool,
 }
 
 impl Tally {
@@ -53,6 +60,7 @@ impl RayCounters {
     pub fn add(&mut self, other: &RayCounters) {
         self.rays += other.rays;
         self.shadow_rays += other.shadow_rays;
+        self.time.add(&other.time);
     }
 
     /// All rays.

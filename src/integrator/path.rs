@@ -7,9 +7,10 @@
 //! addressed by (bounce, `Dim`), so the choices of one decision never shift another's
 //! numbers.
 
-use super::Tally;
 use super::direct::estimate_direct;
+use super::timing::timed;
 use super::transmittance;
+use super::{RayCounters, Tally};
 use crate::geometry::{Ray, SurfaceHit};
 use crate::light::{Light, LightId};
 use crate::light_sampler::{LightStrategy, ShadingContext};
@@ -70,16 +71,22 @@ struct Previous {
 /// the scene, MIS-weighted against next-event estimation when the ray was found by BSDF
 /// sampling at `prev` (a camera ray sees a sun only where it is camera-visible).
 #[inline]
-fn escaped(scene: &Scene, strategy: &LightStrategy, dir: Vec3A, prev: Option<Previous>) -> Rgb {
+fn escaped(
+    scene: &Scene,
+    strategy: &LightStrategy,
+    dir: Vec3A,
+    prev: Option<Previous>,
+    counters: &mut RayCounters,
+) -> Rgb {
     let mut l = Rgb::ZERO;
     if let Some(id) = scene.environment {
         let Light::Environment(env) = &scene.lights[id as usize] else { unreachable!("the environment index") };
-        l += env.radiance_from(dir) * bsdf_hit_weight(strategy, id, prev, |_| env.pdf(dir));
+        l += env.radiance_from(dir) * bsdf_hit_weight(strategy, id, prev, |_| env.pdf(dir), counters);
     }
     for &id in &scene.suns {
         let Light::Sun(sun) = &scene.lights[id as usize] else { unreachable!("a sun's index") };
         if prev.is_some() || sun.camera_visible {
-            l += sun.radiance_from(dir) * bsdf_hit_weight(strategy, id, prev, |_| sun.pdf());
+            l += sun.radiance_from(dir) * bsdf_hit_weight(strategy, id, prev, |_| sun.pdf(), counters);
         }
     }
     l
@@ -97,6 +104,7 @@ fn lamps_seen(
     t_end: f32,
     prev: Option<Previous>,
     medium: Rgb,
+    counters: &mut RayCounters,
 ) -> Rgb {
     let mut l = Rgb::ZERO;
     scene.lamps_along(ray, t_end, |id, hit| {
@@ -105,7 +113,7 @@ fn lamps_seen(
             return;
         }
         let through = if medium != Rgb::ZERO { transmittance(medium, hit.t * ray.dir.length()) } else { Rgb::ONE };
-        let weight = bsdf_hit_weight(strategy, id, prev, |ctx| light.pdf_li(ctx.p, hit.p, hit.n));
+        let weight = bsdf_hit_weight(strategy, id, prev, |ctx| light.pdf_li(ctx.p, hit.p, hit.n), counters);
         l += hit.radiance * through * weight;
     });
     l
@@ -120,19 +128,21 @@ fn bsdf_hit_weight(
     id: u32,
     prev: Option<Previous>,
     light_pdf: impl FnOnce(&ShadingContext) -> f32,
+    counters: &mut RayCounters,
 ) -> f32 {
     match prev {
         None => 1.0,
         Some(v) => {
-            let pmf = strategy.selection_pmf(&v.ctx, LightId(id), v.every_light);
+            let pmf = timed(counters.timing, &mut counters.time.choice, || {
+                strategy.selection_pmf(&v.ctx, LightId(id), v.every_light)
+            });
             power_heuristic(v.bsdf_pdf, pmf * light_pdf(&v.ctx))
         }
     }
 }
 
-/// What the light `id` emitting at `hit` back along `dir` adds to a path of throughput
-/// `beta`, weighted against next-event estimation when the ray was found by BSDF sampling at
-/// `prev`.
+/// What the light `id` emitting at `hit` back along `dir` sends along the path, weighted
+/// against next-event estimation when the ray was found by BSDF sampling at `prev`.
 #[inline]
 fn emitted(
     scene: &Scene,
@@ -141,14 +151,14 @@ fn emitted(
     hit: &SurfaceHit,
     dir: Vec3A,
     prev: Option<Previous>,
-    beta: Rgb,
+    counters: &mut RayCounters,
 ) -> Rgb {
     let light = &scene.lights[id as usize];
     let le = light.emitted(hit.n_geom, dir, hit.uv, &scene.images);
     if le == Rgb::ZERO {
         return le;
     }
-    beta * le * bsdf_hit_weight(strategy, id, prev, |ctx| light.pdf_li(ctx.p, hit.p, hit.n_geom))
+    le * bsdf_hit_weight(strategy, id, prev, |ctx| light.pdf_li(ctx.p, hit.p, hit.n_geom), counters)
 }
 
 /// Russian roulette from [`RR_MIN_DEPTH`] on: a path survives with probability
@@ -186,14 +196,16 @@ pub fn radiance(
     let mut medium = Rgb::ZERO;
     let mut depth = 0u32;
     loop {
-        tally.rays.rays += 1;
-        let hit = scene.intersect(&ray, f32::INFINITY);
+        let counters = &mut tally.rays;
+        counters.rays += 1;
+        counters.time.closest_rays += counters.timing as u64;
+        let hit = timed(counters.timing, &mut counters.time.closest, || scene.intersect(&ray, f32::INFINITY));
         if !scene.lamps.is_empty() && (prev.is_some() || scene.lamps.camera_visible()) {
             let t_end = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-            l += beta * lamps_seen(scene, strategy, &ray, t_end, prev, medium);
+            l += beta * lamps_seen(scene, strategy, &ray, t_end, prev, medium, counters);
         }
         let Some(hit) = hit else {
-            l += beta * escaped(scene, strategy, ray.dir.normalize(), prev);
+            l += beta * escaped(scene, strategy, ray.dir.normalize(), prev, counters);
             break;
         };
         if medium != Rgb::ZERO {
@@ -204,7 +216,7 @@ pub fn radiance(
             first_hit = Some(FirstHit::of(scene, &hit, wo));
         }
         if let Some(id) = hit.light {
-            l += emitted(scene, strategy, id, &hit, ray.dir, prev, beta);
+            l += beta * emitted(scene, strategy, id, &hit, ray.dir, prev, counters);
         }
         if depth == max_depth {
             break;

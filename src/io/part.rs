@@ -31,6 +31,11 @@ pub struct PartHeader {
     pub scene_hash: String,
     /// Light sampler.
     pub sampler: String,
+    /// Ray tracer (`builtin`, `embree`): tracers differ in the last bits of hit points, so
+    /// only parts of one tracer add up to the bits one render gives. Empty in parts written
+    /// before myriad recorded it.
+    #[serde(default)]
+    pub tracer: String,
     /// Seed.
     pub seed: u64,
     /// Maximum scattering events.

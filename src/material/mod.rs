@@ -444,7 +444,7 @@ mod tests {
             let attr = Some(Attributes { base, smooth: true, has_uv: true });
             g.push_triangle([quad[0], quad[1], quad[2]], [0, 1, 2], attr, 0, NO_LIGHT, false);
             g.push_triangle([quad[0], quad[2], quad[3]], [0, 2, 3], attr, 0, NO_LIGHT, false);
-            let geo = g.build();
+            let geo = g.build(crate::geometry::TracerKind::default()).0;
             let hit =
                 geo.intersect(&Ray::new(Vec3A::new(0.2, 0.3, 1.0), -Vec3A::Z), f32::INFINITY, |_, _| false).unwrap();
             let n = material.mapped_normal(hit.n_shading, || geo.position_derivatives(hit.triangle), hit.uv, &images);

@@ -42,6 +42,8 @@ pub struct SceneStats {
     pub cameras: Vec<String>,
     /// Time to build the BVH.
     pub bvh_build_time: Duration,
+    /// The ray tracer the BVH is for (`builtin`, `embree`).
+    pub tracer: &'static str,
     /// Time for the whole build (validation, flattening, lights, BVH).
     pub build_time: Duration,
     /// Bytes of geometry and BVH.

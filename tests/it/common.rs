@@ -226,7 +226,8 @@ pub fn scene_from(
         desc.instances.push(InstanceDesc { mesh: i as u32, transform: m, name: format!("mesh {i}") });
     }
     let (scene, report) =
-        build(desc, &BuildOptions { resolution: Some(resolution), camera: None }).expect("test scene builds");
+        build(desc, &BuildOptions { resolution: Some(resolution), camera: None, ..Default::default() })
+            .expect("test scene builds");
     TestScene { scene, resolution: report.resolution }
 }
 
@@ -334,7 +335,7 @@ pub fn load_report(
 ) -> myriad::Result<myriad::commands::LoadedScene> {
     let options = myriad::commands::SceneOptions {
         load: Default::default(),
-        build: BuildOptions { resolution, camera: camera.map(String::from) },
+        build: BuildOptions { resolution, camera: camera.map(String::from), ..Default::default() },
     };
     myriad::commands::load_scene(Some(path), &options)
 }

@@ -20,4 +20,5 @@ mod report_page;
 mod scene_loading;
 mod slurm;
 mod split;
+mod tracers;
 mod view;

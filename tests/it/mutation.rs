@@ -365,7 +365,11 @@ fn exercise(path: &Path) -> myriad::Result<()> {
     let obj = path.extension().is_some_and(|e| e == "obj");
     let options = SceneOptions {
         load: Default::default(),
-        build: BuildOptions { resolution: Some(UVec2::new(4, 3)), camera: obj.then(|| AUTO_CAMERA.to_string()) },
+        build: BuildOptions {
+            resolution: Some(UVec2::new(4, 3)),
+            camera: obj.then(|| AUTO_CAMERA.to_string()),
+            ..Default::default()
+        },
     };
     let loaded = load_scene(Some(path), &options)?;
     let (scene, resolution) = (loaded.scene, loaded.report.resolution);

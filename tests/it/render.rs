@@ -204,7 +204,7 @@ fn scene_path(name: &str) -> std::path::PathBuf {
 /// z-test and per-pixel outliers, with both films' variances).
 #[test]
 fn samplers_agree_on_cornell_9x9() {
-    let opts = BuildOptions { resolution: Some(UVec2::new(32, 24)), camera: None };
+    let opts = BuildOptions { resolution: Some(UVec2::new(32, 24)), camera: None, ..Default::default() };
     let scene = TestScene::from(load_scene(Some(&scene_path("cornell-9x9.ron")), &opts.clone().into()).unwrap());
     let reference = render_with(&scene, LightSamplerKind::All, 64, 3, 11);
     let kinds = &ALL_KINDS[1..];
@@ -270,7 +270,7 @@ fn same_seed_gives_identical_pixels_for_any_thread_count() {
 }
 
 fn identical_for_any_thread_count(kind: LightSamplerKind) {
-    let opts = BuildOptions { resolution: Some(UVec2::new(24, 18)), camera: None };
+    let opts = BuildOptions { resolution: Some(UVec2::new(24, 18)), camera: None, ..Default::default() };
     let films: Vec<Film> = [1usize, 2, 3]
         .iter()
         .map(|&threads| {
@@ -303,7 +303,7 @@ fn pass_boundaries_do_not_change_pixels() {
     // A fixed-spp render runs passes of 1, 1, 2, 4 samples; an equal-time render runs passes
     // sized by the clock. Both add each pixel's samples in index order, so whatever spp the
     // timed render reached, a fixed-spp render of that many samples matches it bit for bit.
-    let opts = BuildOptions { resolution: Some(UVec2::new(8, 6)), camera: None };
+    let opts = BuildOptions { resolution: Some(UVec2::new(8, 6)), camera: None, ..Default::default() };
     let scene = load_scene(None, &opts.clone().into()).unwrap().scene;
     let strategy = LightStrategy::build(LightSamplerKind::Uniform, &scene.lights, scene.center, scene.radius);
     let resolution = UVec2::new(8, 6);
@@ -328,7 +328,10 @@ fn a_progressive_render_in_passes_of_its_own_is_the_render_and_a_called_off_pass
     // The viewer drives `Progressive` itself (passes of 3, then 5) and calls passes off when
     // its view changes: the image at 8 spp is `render`'s, and a called-off pass is None.
     let resolution = UVec2::new(8, 6);
-    let scene = load_scene(None, &BuildOptions { resolution: Some(resolution), camera: None }.into()).unwrap().scene;
+    let scene =
+        load_scene(None, &BuildOptions { resolution: Some(resolution), camera: None, ..Default::default() }.into())
+            .unwrap()
+            .scene;
     let strategy = LightStrategy::build(LightSamplerKind::Learned, &scene.lights, scene.center, scene.radius);
     let settings =
         RenderSettings { budget: Budget::Spp(8), seed: 4, max_depth: 3, resolution, aovs: Default::default() };
@@ -351,7 +354,7 @@ fn a_progressive_render_in_passes_of_its_own_is_the_render_and_a_called_off_pass
 fn the_image_size_is_a_render_setting_not_part_of_the_scene() {
     // A scene built for 8 × 6 renders at 16 × 12 exactly as one built for 16 × 12 does.
     let built = |w, h| {
-        let opts = BuildOptions { resolution: Some(UVec2::new(w, h)), camera: None };
+        let opts = BuildOptions { resolution: Some(UVec2::new(w, h)), camera: None, ..Default::default() };
         load_scene(None, &opts.into()).unwrap().scene
     };
     let (small, large) = (built(8, 6), built(16, 12));
@@ -369,7 +372,7 @@ fn the_image_size_is_a_render_setting_not_part_of_the_scene() {
 /// moves samples off hidden lamps, and its image agrees with the tree's (independent seeds).
 #[test]
 fn learned_agrees_with_the_tree_where_lights_are_hidden() {
-    let opts = BuildOptions { resolution: Some(UVec2::new(32, 24)), camera: None };
+    let opts = BuildOptions { resolution: Some(UVec2::new(32, 24)), camera: None, ..Default::default() };
     let scene = TestScene::from(load_scene(Some(&scene_path("offices.ron")), &opts.clone().into()).unwrap());
     let reference = render_with(&scene, LightSamplerKind::Tree, 64, 3, 21);
     for seed in [22, 23] {

@@ -20,7 +20,7 @@ fn scene(body: &str) -> String {
 fn built(text: &str, dir: &Path) -> myriad::Result<(myriad::scene::Scene, myriad::scene::SceneReport)> {
     build(
         parse(text, "test.ron", dir, &Default::default())?,
-        &BuildOptions { resolution: Some(UVec2::new(8, 6)), camera: None },
+        &BuildOptions { resolution: Some(UVec2::new(8, 6)), camera: None, ..Default::default() },
     )
 }
 

@@ -38,7 +38,7 @@ use runs::SamplerRuns;
 pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
     let scene_options = SceneOptions {
         load: opts.load,
-        build: BuildOptions { resolution: opts.resolution, camera: opts.camera.clone() },
+        build: BuildOptions { resolution: opts.resolution, camera: opts.camera.clone(), ..Default::default() },
     };
     // The scene must load before the output folder is made: a broken scene leaves nothing.
     let loaded = load_scene(Some(&opts.scene), &scene_options)?;

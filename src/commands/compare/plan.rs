@@ -88,6 +88,8 @@ pub(crate) struct Plan {
     pub(crate) max_depth: u32,
     pub(crate) resolution: UVec2,
     pub(crate) seeds: Vec<u64>,
+    /// The ray tracer the scene was built for, for the provenance.
+    pub(crate) tracer: &'static str,
 }
 
 impl Plan {
@@ -105,7 +107,8 @@ impl Plan {
         let what = format!("{} sampler(s) × --seeds {}", samplers.len(), opts.seeds);
         crate::limits::check_runs(samplers.len() as u64 * opts.seeds as u64, what).map_err(Error::Usage)?;
         let seeds = (1..=opts.seeds as u64).map(|k| seed.wrapping_add(k)).collect();
-        Ok(Self { samplers, budget, max_depth, resolution: report.resolution, seeds })
+        let tracer = report.stats.tracer;
+        Ok(Self { samplers, budget, max_depth, resolution: report.resolution, seeds, tracer })
     }
 
     pub(crate) fn settings(&self, seed: u64) -> RenderSettings {

@@ -151,8 +151,13 @@ pub(crate) fn reference(
     if out.stats.stopped != Stop::No {
         return Err(Error::Interrupted);
     }
-    let mut meta =
-        crate::commands::provenance::provenance(&opts.scene.display().to_string(), sampler, &settings, &out.stats);
+    let mut meta = crate::commands::provenance::provenance(
+        &opts.scene.display().to_string(),
+        sampler,
+        scene.geometry.accel.tracer().name(),
+        &settings,
+        &out.stats,
+    );
     meta.push(("myriad.reference_key".into(), key));
     crate::io::exr::write(&path, &out.film.layers(aovs), &meta)?;
     let pixels = out.film.means();

@@ -284,6 +284,7 @@ pub(crate) fn write_first(
     let meta = crate::commands::provenance::provenance(
         &opts.scene.display().to_string(),
         kind,
+        plan.tracer,
         &plan.settings(run.seed),
         &stats,
     );

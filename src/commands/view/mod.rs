@@ -109,7 +109,7 @@ impl fmt::Display for ViewReport {
 pub fn view(opts: &ViewOptions) -> Result<ViewReport> {
     let scene_options = SceneOptions {
         load: opts.load,
-        build: BuildOptions { resolution: opts.resolution, camera: opts.camera.clone() },
+        build: BuildOptions { resolution: opts.resolution, camera: opts.camera.clone(), ..Default::default() },
     };
     let mut loaded = load_scene(opts.scene.as_deref(), &scene_options)?;
     let built = Instant::now();
@@ -123,6 +123,7 @@ pub fn view(opts: &ViewOptions) -> Result<ViewReport> {
         spp: resolved.budget.fixed().map_or(UNLIMITED_SPP, |f| f.1),
         time: opts.settings.time,
         scene_name: loaded.report.source.clone(),
+        tracer: loaded.report.stats.tracer,
     };
     crate::io::ensure_dir(&opts.out_dir)?;
     let title = format!("myriad view: {}", loaded.report.source);

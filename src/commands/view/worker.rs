@@ -89,6 +89,8 @@ pub struct Accumulate {
     pub time: Option<Duration>,
     /// The scene's name, for the provenance of saved images.
     pub scene_name: String,
+    /// The ray tracer the scene was built for, for the same.
+    pub tracer: &'static str,
 }
 
 impl Accumulate {
@@ -245,7 +247,7 @@ fn save(
     let film = progressive.film();
     let path = dir.join(format!("view-{sampler}-{}spp.exr", film.spp()));
     let stats = crate::render::RenderStats { spp: film.spp(), elapsed, ..Default::default() };
-    let meta = crate::commands::provenance::provenance(&plan.scene_name, sampler, settings, &stats);
+    let meta = crate::commands::provenance::provenance(&plan.scene_name, sampler, plan.tracer, settings, &stats);
     match crate::io::exr::write(&path, &film.layers(AovSet::default()), &meta) {
         Ok(()) => Report::Saved(path),
         Err(e) => Report::Failed(e.to_string()),

@@ -17,7 +17,7 @@ use super::description::{CameraDesc, CameraPlacement, LightDesc, SceneDescriptio
 use super::{Lamps, Scene, SceneReport, SceneStats};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
-use crate::geometry::Geometry;
+use crate::geometry::{Geometry, TracerKind};
 use crate::light::{Light, PointLight, SpotLight};
 use crate::limits::{BYTES_PER_INSTANCE, BYTES_PER_LIGHT, BYTES_PER_PIXEL, BYTES_PER_TRIANGLE, check_memory};
 use crate::math::{UVec2, Vec3A};
@@ -29,6 +29,8 @@ pub struct BuildOptions {
     pub resolution: Option<UVec2>,
     /// Camera to use, by name; default: the first.
     pub camera: Option<String>,
+    /// The ray tracer; default: `--tracer`, else MYRIAD_TRACER, else the fastest built.
+    pub tracer: TracerKind,
 }
 
 /// Width used when neither the command line nor the scene gives a resolution.
@@ -165,7 +167,7 @@ pub fn build(mut desc: SceneDescription, opts: &BuildOptions) -> Result<(Scene, 
     let listed = placer.lights.len();
     placer.place_lights()?;
     let Placer { geo, mut lights, mut stats, materials, degenerate_emitters, .. } = placer;
-    let geometry = geo.build();
+    let (geometry, tracer_warning) = geo.build(opts.tracer);
     let (center, radius) = bounds(&geometry, &lights);
     // A directional light's power is its irradiance over the scene's disc.
     for (i, l) in desc.lights.iter().enumerate() {
@@ -185,6 +187,7 @@ pub fn build(mut desc: SceneDescription, opts: &BuildOptions) -> Result<(Scene, 
         None => (auto_camera(file, center, radius, resolution)?, AUTO_CAMERA.to_string()),
     };
     let mut warnings = desc.warnings.clone();
+    warnings.extend(tracer_warning);
     if degenerate_emitters > 0 {
         warnings.push(format!("{degenerate_emitters} emissive triangles have zero area and do not emit"));
     }
@@ -240,6 +243,7 @@ impl SceneStats {
         self.triangles = geometry.triangle_count();
         self.stored_triangles = geometry.stored_triangle_count();
         self.bvh_build_time = geometry.accel.stats().build_time;
+        self.tracer = geometry.accel.tracer().name();
         self.geometry_bytes = geometry.memory_bytes();
         self.light_bytes = std::mem::size_of_val(lights);
         self.build_time = start.elapsed();
