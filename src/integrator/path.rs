@@ -141,24 +141,26 @@ fn bsdf_hit_weight(
     }
 }
 
-/// What the light `id` emitting at `hit` back along `dir` sends along the path, weighted
-/// against next-event estimation when the ray was found by BSDF sampling at `prev`.
+/// What the light emitting at `hit` (if it is on one) back along `dir` adds to a path of
+/// throughput `beta`, weighted against next-event estimation when the ray was found by BSDF
+/// sampling at `prev`.
 #[inline]
 fn emitted(
     scene: &Scene,
     strategy: &LightStrategy,
-    id: u32,
     hit: &SurfaceHit,
     dir: Vec3A,
     prev: Option<Previous>,
+    beta: Rgb,
     counters: &mut RayCounters,
 ) -> Rgb {
+    let Some(id) = hit.light else { return Rgb::ZERO };
     let light = &scene.lights[id as usize];
     let le = light.emitted(hit.n_geom, dir, hit.uv, &scene.images);
     if le == Rgb::ZERO {
         return le;
     }
-    le * bsdf_hit_weight(strategy, id, prev, |ctx| light.pdf_li(ctx.p, hit.p, hit.n_geom), counters)
+    beta * le * bsdf_hit_weight(strategy, id, prev, |ctx| light.pdf_li(ctx.p, hit.p, hit.n_geom), counters)
 }
 
 /// Russian roulette from [`RR_MIN_DEPTH`] on: a path survives with probability
@@ -215,9 +217,7 @@ pub fn radiance(
         if depth == 0 {
             first_hit = Some(FirstHit::of(scene, &hit, wo));
         }
-        if let Some(id) = hit.light {
-            l += beta * emitted(scene, strategy, id, &hit, ray.dir, prev, counters);
-        }
+        l += emitted(scene, strategy, &hit, ray.dir, prev, beta, counters);
         if depth == max_depth {
             break;
         }
