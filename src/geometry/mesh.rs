@@ -138,32 +138,35 @@ impl GeometryBuilder {
     pub fn build(self, tracer: TracerKind) -> (Geometry, Option<String>) {
         let start = Instant::now();
         let masked = self.blocks.iter().flat_map(|b| &b.info).any(|i| i.masked);
-        let tracer = tracer.resolve(self.blocks.iter().map(|b| b.tris.len()).sum());
-        if tracer == TracerKind::Builtin {
+        if tracer.resolve(self.blocks.iter().map(|b| b.tris.len()).sum()) == TracerKind::Builtin {
             return (self.build_builtin(start, masked), None);
         }
         #[cfg(embree)]
+        return self.build_embree(start, masked);
+        #[cfg(not(embree))]
         {
-            let blocks_masked: Vec<bool> = self.blocks.iter().map(|b| b.info.iter().any(|i| i.masked)).collect();
-            let blases = self.blocks.iter().map(|b| Blas::corners(&b.tris)).collect();
-            match Accel::new_embree(blases, &self.placements, &blocks_masked, start.elapsed()) {
-                Ok(accel) => {
-                    let info = self.blocks.into_iter().map(|b| b.info).collect();
-                    return (Geometry { accel, info, normals: self.normals, uvs: self.uvs, masked }, None);
-                }
-                Err(why) => {
-                    let why = format!("{why}: traced with the built-in tracer instead");
-                    return (self.build_builtin(Instant::now(), masked), Some(why));
-                }
+            let why = "this myriad was built without Embree (install it: apt install libembree-dev, then build \
+                       again): traced with the built-in tracer";
+            (self.build_builtin(start, masked), Some(why.to_string()))
+        }
+    }
+
+    /// [`GeometryBuilder::build`] for Embree: the blocks as they are (Embree builds its own
+    /// BVHs), or the built-in tracer's where Embree fails, with why.
+    #[cfg(embree)]
+    fn build_embree(self, start: Instant, masked: bool) -> (Geometry, Option<String>) {
+        let blocks_masked: Vec<bool> = self.blocks.iter().map(|b| b.info.iter().any(|i| i.masked)).collect();
+        let blases = self.blocks.iter().map(|b| Blas::corners(&b.tris)).collect();
+        match Accel::new_embree(blases, &self.placements, &blocks_masked, start.elapsed()) {
+            Ok(accel) => {
+                let info = self.blocks.into_iter().map(|b| b.info).collect();
+                (Geometry { accel, info, normals: self.normals, uvs: self.uvs, masked }, None)
+            }
+            Err(why) => {
+                let why = format!("{why}: traced with the built-in tracer instead");
+                (self.build_builtin(Instant::now(), masked), Some(why))
             }
         }
-        #[allow(unreachable_code)]
-        let why = (tracer == TracerKind::Embree).then(|| {
-            "this myriad was built without Embree (install it: apt install libembree-dev, then build again): \
-             traced with the built-in tracer"
-                .to_string()
-        });
-        (self.build_builtin(start, masked), why)
     }
 
     fn build_builtin(self, start: Instant, masked: bool) -> Geometry {

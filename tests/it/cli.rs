@@ -12,7 +12,8 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
-const GOOD: &str = r#"Scene(
+/// A small scene that renders.
+pub const GOOD: &str = r#"Scene(
     camera: Perspective(eye: (0, 1, 3), look_at: (0, 1, 0), yfov_deg: 40),
     film: (resolution: (16, 12)),
     materials: { "white": Diffuse(albedo: (0.7, 0.7, 0.7)) },

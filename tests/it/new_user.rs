@@ -5,27 +5,15 @@
 //! that cannot be planned are refused before anything is allocated or written.
 
 use std::path::Path;
-use std::process::Output;
 
-use crate::split::{myriad, ok};
-
-const SCENE: &str = r#"Scene(
-    camera: Perspective(eye: (0, 1, 3), look_at: (0, 1, 0), yfov_deg: 40),
-    film: (resolution: (16, 12)),
-    materials: { "white": Diffuse(albedo: (0.7, 0.7, 0.7)) },
-    objects: [ Quad(corner: (-1, 0, 1), edge1: (2, 0, 0), edge2: (0, 0, -2), material: "white") ],
-    lights: [ Quad(corner: (-0.2, 1.9, -0.2), edge1: (0.4, 0, 0), edge2: (0, 0, 0.4), radiance: (5, 5, 5)) ],
-)"#;
+use crate::cli::GOOD as SCENE;
+use crate::split::{myriad, ok, text};
 
 /// A folder holding `SCENE` as scene.ron.
 fn folder() -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("scene.ron"), SCENE).unwrap();
     dir
-}
-
-fn text(o: &Output) -> String {
-    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
 }
 
 /// Runs `args` in `dir` expecting a clear failure that mentions every one of `needles`.

@@ -12,9 +12,14 @@ pub fn myriad(args: &[&str], dir: &Path) -> Output {
     Command::new(env!("CARGO_BIN_EXE_myriad")).args(args).current_dir(dir).output().expect("myriad runs")
 }
 
+/// What a run printed, standard output then standard error.
+pub fn text(out: &Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr))
+}
+
 pub fn ok(args: &[&str], dir: &Path) -> String {
     let out = myriad(args, dir);
-    let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    let text = text(&out);
     assert!(out.status.success(), "{args:?}: {text}");
     text
 }

@@ -2,7 +2,7 @@
 //! says so and traces anyway, and the tracer in use is reported and kept apart in merges.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 
 use myriad::commands::{SceneOptions, load_scene};
 use myriad::film::Film;
@@ -13,19 +13,7 @@ use myriad::settings::LightSamplerKind;
 
 use crate::common::{TestScene, blender, cornell};
 use crate::render::render_with;
-
-fn myriad(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_myriad"))
-        .args(args)
-        .current_dir(dir)
-        .env_remove("MYRIAD_TRACER")
-        .output()
-        .expect("myriad runs")
-}
-
-fn text(o: &Output) -> String {
-    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
-}
+use crate::split::{myriad, text};
 
 fn render(path: &Path, tracer: TracerKind) -> (Film, TracerKind) {
     let build = BuildOptions { resolution: Some(UVec2::new(48, 36)), camera: None, tracer };
