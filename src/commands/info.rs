@@ -90,9 +90,10 @@ impl fmt::Display for InfoReport {
         if let Some(t) = &self.tree {
             writeln!(
                 f,
-                "light tree   built in {}: {} nodes (4-wide), depth {}, {} ({:.0} B/light)",
+                "light tree   built in {}: {} nodes ({}-wide), depth {}, {} ({:.0} B/light)",
                 human_duration(t.build_time),
                 t.nodes,
+                crate::light_sampler::TREE_WIDTH,
                 t.depth,
                 human_bytes(t.memory_bytes as u64),
                 t.memory_bytes as f64 / s.lights.len() as f64

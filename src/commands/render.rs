@@ -276,7 +276,7 @@ impl fmt::Display for RenderReport {
             human_bytes(self.sampler_bytes as u64)
         )?;
         if let Some(t) = &self.tree {
-            writeln!(f, "tree       {} nodes (4-wide), depth {}", t.nodes, t.depth)?;
+            writeln!(f, "tree       {} nodes ({}-wide), depth {}", t.nodes, crate::light_sampler::TREE_WIDTH, t.depth)?;
         }
         writeln!(
             f,

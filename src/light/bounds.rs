@@ -29,9 +29,9 @@
 //! never 0 for a light that emits.
 
 use super::Light;
-use crate::math::{Vec3A, Vec4, safe_acos, safe_sqrt};
-use glam::BVec4A;
+use crate::math::{Vec3A, safe_acos, safe_sqrt};
 use std::f32::consts::PI;
+use wide::{CmpGe, CmpGt, CmpLe};
 
 /// Conservative emission bounds of a light or cluster.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -55,89 +55,100 @@ pub struct LightBounds {
     pub infinite: bool,
 }
 
-/// Four bounds in structure-of-arrays form, evaluated together with SSE: the form both the
-/// tree's nodes (after decoding) and the `local` sampler evaluate importance on. Empty lanes
-/// have `phi = 0` and importance 0.
+/// Lanes of a [`BoundsPacket`]: eight f32, one AVX register in the x86-64-v3 build (two SSE
+/// registers elsewhere); a comparison's mask is the same type, all bits set where true.
+pub type Lanes = wide::f32x8;
+
+/// Bounds a [`BoundsPacket`] holds.
+pub const LANES: usize = 8;
+
+/// Eight bounds in structure-of-arrays form, evaluated together: the form both the tree's
+/// nodes (after decoding) and the `local` sampler evaluate importance on. Empty lanes have
+/// `phi = 0` and importance 0.
 #[derive(Clone, Copy, Debug)]
 pub struct BoundsPacket {
-    /// Bounding-sphere centres of the four lanes, as x, y and z components.
-    pub cx: Vec4,
+    /// Bounding-sphere centres of the lanes, as x, y and z components.
+    pub cx: Lanes,
     #[allow(missing_docs)]
-    pub cy: Vec4,
+    pub cy: Lanes,
     #[allow(missing_docs)]
-    pub cz: Vec4,
-    /// Half extents of the four boxes along x, y and z.
-    pub hx: Vec4,
+    pub cz: Lanes,
+    /// Half extents of the boxes along x, y and z.
+    pub hx: Lanes,
     #[allow(missing_docs)]
-    pub hy: Vec4,
+    pub hy: Lanes,
     #[allow(missing_docs)]
-    pub hz: Vec4,
+    pub hz: Lanes,
     /// Squared bounding-sphere radii (the boxes' half diagonals).
-    pub r2: Vec4,
+    pub r2: Lanes,
     /// Emission bounds.
-    pub phi: Vec4,
+    pub phi: Lanes,
     /// Cone axes.
-    pub wx: Vec4,
+    pub wx: Lanes,
     /// Axis y.
-    pub wy: Vec4,
+    pub wy: Lanes,
     /// Axis z.
-    pub wz: Vec4,
+    pub wz: Lanes,
     /// cos θo.
-    pub cos_o: Vec4,
+    pub cos_o: Lanes,
     /// sin θo.
-    pub sin_o: Vec4,
+    pub sin_o: Lanes,
     /// cos θe.
-    pub cos_e: Vec4,
-    /// Lanes that emit on both sides.
-    pub two_sided: BVec4A,
-    /// Lanes that are directional (infinite) bounds.
-    pub infinite: BVec4A,
+    pub cos_e: Lanes,
+    /// Lanes that emit on both sides (a mask).
+    pub two_sided: Lanes,
+    /// Lanes that are directional (infinite) bounds (a mask).
+    pub infinite: Lanes,
 }
 
-/// Lane-wise square root (one SSE instruction on x86-64).
+/// `a` where `mask`, else `b`.
 #[inline(always)]
-fn sqrt4(v: Vec4) -> Vec4 {
-    #[cfg(target_arch = "x86_64")]
-    {
-        // SAFETY: SSE is part of the x86-64 baseline, so the instruction always exists.
-        Vec4::from(unsafe { std::arch::x86_64::_mm_sqrt_ps(v.into()) })
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        v.sqrt()
-    }
+fn select(mask: Lanes, a: Lanes, b: Lanes) -> Lanes {
+    mask.blend(a, b)
+}
+
+/// Lane-wise maximum, `b` where either is NaN (the SSE/AVX instruction's rule).
+#[inline(always)]
+fn max(a: Lanes, b: Lanes) -> Lanes {
+    a.fast_max(b)
+}
+
+/// Lane-wise minimum, `b` where either is NaN.
+#[inline(always)]
+fn min(a: Lanes, b: Lanes) -> Lanes {
+    a.fast_min(b)
 }
 
 /// cos(max(0, a − b)) per lane from cos and sin of a and b (angles in [0, π]): 1 where a ≤ b.
 #[inline(always)]
-fn cos_sub_clamped4(cos_a: Vec4, sin_a: Vec4, cos_b: Vec4, sin_b: Vec4) -> Vec4 {
-    Vec4::select(cos_a.cmpge(cos_b), Vec4::ONE, cos_a * cos_b + sin_a * sin_b)
+fn cos_sub_clamped(cos_a: Lanes, sin_a: Lanes, cos_b: Lanes, sin_b: Lanes) -> Lanes {
+    select(cos_a.cmp_ge(cos_b), Lanes::ONE, cos_a * cos_b + sin_a * sin_b)
 }
 
 /// sin θ from cos θ for θ ∈ [0, π].
 #[inline(always)]
-fn sin_from_cos4(c: Vec4) -> Vec4 {
-    sqrt4((Vec4::ONE - c * c).max(Vec4::ZERO))
+fn sin_from_cos(c: Lanes) -> Lanes {
+    max(Lanes::ONE - c * c, Lanes::ZERO).sqrt()
+}
+
+/// A mask lane: all bits set for true.
+#[inline(always)]
+fn mask_lane(b: bool) -> f32 {
+    if b { f32::from_bits(u32::MAX) } else { 0.0 }
 }
 
 impl BoundsPacket {
-    /// A packet of up to four bounds.
+    /// A packet of up to [`LANES`] bounds.
     pub fn new(bounds: &[LightBounds]) -> Self {
-        assert!(bounds.len() <= 4);
+        assert!(bounds.len() <= LANES);
         let lane = |f: &dyn Fn(&LightBounds) -> f32, empty: f32| {
-            let mut v = [empty; 4];
+            let mut v = [empty; LANES];
             for (k, b) in bounds.iter().enumerate() {
                 v[k] = f(b);
             }
-            Vec4::from_array(v)
+            Lanes::new(v)
         };
-        let mask = |f: &dyn Fn(&LightBounds) -> bool| {
-            let mut v = [false; 4];
-            for (k, b) in bounds.iter().enumerate() {
-                v[k] = f(b);
-            }
-            BVec4A::from_array(v)
-        };
+        let mask = |f: &dyn Fn(&LightBounds) -> bool| lane(&|b| mask_lane(f(b)), 0.0);
         let c = |b: &LightBounds| b.centroid();
         Self {
             cx: lane(&|b| c(b).x, 0.0),
@@ -168,66 +179,61 @@ impl BoundsPacket {
     /// of |d|² − (a·d)² times 1/|d|, so the five roots and the one division run side by
     /// side instead of one after another.
     #[inline]
-    pub fn importance(&self, p: Vec3A, n: Vec3A) -> Vec4 {
-        let (dx, dy, dz) = (Vec4::splat(p.x) - self.cx, Vec4::splat(p.y) - self.cy, Vec4::splat(p.z) - self.cz);
+    pub fn importance(&self, p: Vec3A, n: Vec3A) -> Lanes {
+        let splat = Lanes::splat;
+        let (dx, dy, dz) = (splat(p.x) - self.cx, splat(p.y) - self.cy, splat(p.z) - self.cz);
         let dist2 = dx * dx + dy * dy + dz * dz;
         // Squared-length clamp (change 1 above): a receiver inside the cluster sees it at ≥ r/2.
         // (and 1e-12 m² keeps a receiver exactly at a point light finite).
-        let d2 = dist2.max(0.25 * self.r2).max(Vec4::splat(1e-12));
+        let d2 = max(max(dist2, splat(0.25) * self.r2), splat(1e-12));
         let phi_over_d2 = self.phi / d2;
-        let inv_dist = Vec4::select(dist2.cmpgt(Vec4::ZERO), sqrt4(dist2).recip(), Vec4::ZERO);
+        let inv_dist = select(dist2.cmp_gt(Lanes::ZERO), Lanes::ONE / dist2.sqrt(), Lanes::ZERO);
         // sin θ · |d| for the angle θ between `d` and a unit vector whose dot with `d` is `a_d`.
-        let sin_times_dist = |a_d: Vec4| sqrt4((dist2 - a_d * a_d).max(Vec4::ZERO));
+        let sin_times_dist = |a_d: Lanes| max(dist2 - a_d * a_d, Lanes::ZERO).sqrt();
         // Half-angle subtended by the bounding sphere (θb = π inside it): sin θb = r/d.
-        let inside = dist2.cmple(self.r2);
-        let r = sqrt4(self.r2);
-        let sin_b = Vec4::select(inside, Vec4::ZERO, r * inv_dist);
-        let cos_b = Vec4::select(inside, Vec4::NEG_ONE, sqrt4((dist2 - self.r2).max(Vec4::ZERO)) * inv_dist);
+        let inside = dist2.cmp_le(self.r2);
+        let r = self.r2.sqrt();
+        let sin_b = select(inside, Lanes::ZERO, r * inv_dist);
+        let cos_b = select(inside, splat(-1.0), max(dist2 - self.r2, Lanes::ZERO).sqrt() * inv_dist);
         // Every emitting point q is between d − r and d + r from p (change 5 above).
         let dist = dist2 * inv_dist;
-        let inv_near = (dist - r).max(Vec4::splat(1e-30)).recip();
+        let inv_near = Lanes::ONE / max(dist - r, splat(1e-30));
         // The angle θw between the cone axis and the direction from the cluster towards p.
         let mut w_d = self.wx * dx + self.wy * dy + self.wz * dz;
-        w_d = Vec4::select(self.two_sided, w_d.abs(), w_d);
+        w_d = select(self.two_sided, w_d.abs(), w_d);
         let (cos_w, sin_w) = (w_d * inv_dist, sin_times_dist(w_d) * inv_dist);
         // θ' = max(0, θw − θo − θb): the smallest angle between an emitter normal and the
         // direction towards p. sin(θw − θo) comes from the difference formula, not a root.
-        let cos_x = cos_sub_clamped4(cos_w, sin_w, self.cos_o, self.sin_o);
-        let sin_x = Vec4::select(
-            cos_w.cmpge(self.cos_o),
-            Vec4::ZERO,
-            (sin_w * self.cos_o - cos_w * self.sin_o).max(Vec4::ZERO),
-        );
+        let cos_x = cos_sub_clamped(cos_w, sin_w, self.cos_o, self.sin_o);
+        let sin_x =
+            select(cos_w.cmp_ge(self.cos_o), Lanes::ZERO, max(sin_w * self.cos_o - cos_w * self.sin_o, Lanes::ZERO));
         // The same cosine bounded through the box (change 5 above): w·(p − q) is at most
         // w·(p − c) plus the box's half extents along |w|, and a normal within θo ≤ 90° of w
         // adds at most sin θo to the cosine.
         let w_h = w_d + self.wx.abs() * self.hx + self.wy.abs() * self.hy + self.wz.abs() * self.hz;
-        let box_cos = Vec4::select(
-            self.cos_o.cmpge(Vec4::ZERO),
-            self.sin_o + w_h.max(Vec4::ZERO) * inv_near,
-            Vec4::splat(f32::INFINITY),
-        );
-        let cos_p = cos_sub_clamped4(cos_x, sin_x, cos_b, sin_b).min(box_cos);
-        let mut importance = Vec4::select(cos_p.cmpgt(self.cos_e), phi_over_d2 * cos_p, Vec4::ZERO);
+        let box_cos =
+            select(self.cos_o.cmp_ge(Lanes::ZERO), self.sin_o + max(w_h, Lanes::ZERO) * inv_near, splat(f32::INFINITY));
+        let cos_p = min(cos_sub_clamped(cos_x, sin_x, cos_b, sin_b), box_cos);
+        let mut importance = select(cos_p.cmp_gt(self.cos_e), phi_over_d2 * cos_p, Lanes::ZERO);
         // Directional lanes: irradiance times the best cosine over the cone of directions.
         let mut infinite = self.phi;
         if n != Vec3A::ZERO {
-            let (nx, ny, nz) = (Vec4::splat(n.x), Vec4::splat(n.y), Vec4::splat(n.z));
+            let (nx, ny, nz) = (splat(n.x), splat(n.y), splat(n.z));
             // Signed horizon test (change 3 above): θi' = max(0, θi − θb), zero when ≥ 90°.
             let n_d = nx * dx + ny * dy + nz * dz;
             let (cos_i, sin_i) = (-n_d * inv_dist, sin_times_dist(n_d) * inv_dist);
             // And through the box: n·(q − p) is at most n·(c − p) plus its half extents along
             // |n|; where that is ≤ 0 the whole box is below the horizon.
             let n_h = self.hx * nx.abs() + self.hy * ny.abs() + self.hz * nz.abs() - n_d;
-            let cos_ip = cos_sub_clamped4(cos_i, sin_i, cos_b, sin_b).min(n_h * inv_near);
-            importance *= cos_ip.max(Vec4::ZERO);
+            let cos_ip = min(cos_sub_clamped(cos_i, sin_i, cos_b, sin_b), n_h * inv_near);
+            importance *= max(cos_ip, Lanes::ZERO);
             if self.infinite.any() {
                 let cos_n = nx * self.wx + ny * self.wy + nz * self.wz;
-                let cos_np = cos_sub_clamped4(cos_n, sin_from_cos4(cos_n), self.cos_o, self.sin_o);
-                infinite *= cos_np.max(Vec4::ZERO);
+                let cos_np = cos_sub_clamped(cos_n, sin_from_cos(cos_n), self.cos_o, self.sin_o);
+                infinite *= max(cos_np, Lanes::ZERO);
             }
         }
-        Vec4::select(self.infinite, infinite, importance)
+        select(self.infinite, infinite, importance)
     }
 }
 
@@ -458,7 +464,7 @@ mod tests {
     use crate::math::Rgb;
 
     fn imp(b: &LightBounds, p: Vec3A, n: Vec3A) -> f32 {
-        BoundsPacket::new(&[*b]).importance(p, n).x
+        BoundsPacket::new(&[*b]).importance(p, n).to_array()[0]
     }
 
     #[test]
@@ -466,11 +472,11 @@ mod tests {
         let a = quad(Vec3A::new(0.0, 2.0, 0.0), true, false).bounds();
         let b = Light::Point(PointLight { position: Vec3A::new(1.0, 1.0, 0.0), intensity: Rgb::ONE }).bounds();
         let p = Vec3A::new(0.2, 0.0, 0.1);
-        let v = BoundsPacket::new(&[a, b]).importance(p, Vec3A::Y);
-        assert_eq!(v.x, imp(&a, p, Vec3A::Y));
-        assert_eq!(v.y, imp(&b, p, Vec3A::Y));
-        assert_eq!((v.z, v.w), (0.0, 0.0));
-        assert_eq!(BoundsPacket::new(&[]).importance(Vec3A::ZERO, Vec3A::ZERO), Vec4::ZERO);
+        let v = BoundsPacket::new(&[a, b]).importance(p, Vec3A::Y).to_array();
+        assert_eq!(v[0], imp(&a, p, Vec3A::Y));
+        assert_eq!(v[1], imp(&b, p, Vec3A::Y));
+        assert!(v[2..].iter().all(|&x| x == 0.0));
+        assert_eq!(BoundsPacket::new(&[]).importance(Vec3A::ZERO, Vec3A::ZERO).to_array(), [0.0; LANES]);
     }
 
     fn quad(center: Vec3A, n_down: bool, two_sided: bool) -> Light {

@@ -24,7 +24,7 @@ mod triangle;
 
 pub use area::AreaEmission;
 pub use area_light::{AreaLight, Spread};
-pub use bounds::{BoundsPacket, LightBounds, cone_union};
+pub use bounds::{BoundsPacket, LANES, Lanes, LightBounds, cone_union};
 pub use distant::DistantLight;
 pub use environment::{EnvironmentLight, EnvironmentMap};
 pub use point::PointLight;

@@ -2,8 +2,8 @@
 //! sampler (its `lights_pdf` and `lights_cdf`) and pbrt-v4's `ExhaustiveLightSampler`.
 //!
 //! O(n) per shading point, and again for the pmf MIS needs at an emitter hit: the ideal the
-//! light tree approximates in O(log n). Importances are evaluated four lights at a time
-//! (`BoundsPacket`, SSE) into a per-thread scratch table (allocated once per thread), and the
+//! light tree approximates in O(log n). Importances are evaluated eight lights at a time
+//! (`BoundsPacket`, AVX) into a per-thread scratch table (allocated once per thread), and the
 //! light is the one whose interval ([`Split`]) holds `u`. Intervals in slot order keep the mapping
 //! from `u` to lights monotone, so stratified `u` stay stratified over the lights (pbrt's
 //! single-pass reservoir does not: its choice jumps around as `u` moves), and the slots are the
@@ -15,7 +15,7 @@ use std::cell::RefCell;
 
 use super::order::SpatialOrder;
 use super::{LightSampler, SampledLight, ShadingContext};
-use crate::light::{BoundsPacket, Light, LightBounds, LightId};
+use crate::light::{BoundsPacket, LANES, Light, LightBounds, LightId};
 use crate::math::distribution::{RANGE, Split, probability};
 
 thread_local! {
@@ -37,7 +37,7 @@ impl LocalSampler {
     pub fn new(lights: &[Light]) -> Self {
         let bounds: Vec<LightBounds> = lights.iter().map(Light::bounds).collect();
         let order = SpatialOrder::of(&bounds);
-        Self { packets: order.arrange(&bounds).chunks(4).map(BoundsPacket::new).collect(), order }
+        Self { packets: order.arrange(&bounds).chunks(LANES).map(BoundsPacket::new).collect(), order }
     }
 
     /// Bytes of the light table and the per-thread scratch it keeps.

@@ -20,7 +20,7 @@ pub use cells::{CellSampler, CellStats, MAX_LIGHTS as CELLS_MAX_LIGHTS, MIN_LIGH
 pub use learned::{DEFENSIVE, LEARN_UNTIL, LEVELS, LearnedLayout, LearnedSampler, LearnedStats, Observations};
 pub use local::LocalSampler;
 pub use power::PowerSampler;
-pub use tree::{LightTree, TreeStats};
+pub use tree::{LightTree, TreeStats, WIDTH as TREE_WIDTH};
 pub use uniform::UniformSampler;
 
 use crate::light::{Light, LightId};

@@ -88,20 +88,23 @@ impl TextureRef {
         let img = &images[self.image as usize];
         let uv = self.transform.apply(uv);
         let (w, h) = (img.size.x as i64, img.size.y as i64);
+        // Wrapped once per row and column, not per texel (a wrap may divide).
         let fetch = |x: i64, y: i64| {
-            let (x, y) = (wrap(x, w, self.wrap[0]), wrap(y, h, self.wrap[1]));
             let t = img.texels[(y * w + x) as usize];
             Vec4::new(t[0] as f32, t[1] as f32, t[2] as f32, t[3] as f32) * (1.0 / 255.0)
         };
         let (x, y) = (uv.x * w as f32 - 0.5, uv.y * h as f32 - 0.5);
         if self.nearest {
-            return fetch((x + 0.5).floor() as i64, (y + 0.5).floor() as i64);
+            let (x, y) = ((x + 0.5).floor() as i64, (y + 0.5).floor() as i64);
+            return fetch(wrap(x, w, self.wrap[0]), wrap(y, h, self.wrap[1]));
         }
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
         let (x0, y0) = (x0 as i64, y0 as i64);
-        let top = fetch(x0, y0).lerp(fetch(x0 + 1, y0), fx);
-        let bottom = fetch(x0, y0 + 1).lerp(fetch(x0 + 1, y0 + 1), fx);
+        let (xa, xb) = (wrap(x0, w, self.wrap[0]), wrap(x0 + 1, w, self.wrap[0]));
+        let (ya, yb) = (wrap(y0, h, self.wrap[1]), wrap(y0 + 1, h, self.wrap[1]));
+        let top = fetch(xa, ya).lerp(fetch(xb, ya), fx);
+        let bottom = fetch(xa, yb).lerp(fetch(xb, yb), fx);
         top.lerp(bottom, fy)
     }
 
@@ -117,6 +120,10 @@ impl TextureRef {
 
 #[inline]
 fn wrap(i: i64, n: i64, mode: Wrap) -> i64 {
+    // Inside the image every mode is the identity (and most lookups are inside).
+    if (0..n).contains(&i) {
+        return i;
+    }
     match mode {
         Wrap::Repeat => i.rem_euclid(n),
         Wrap::Clamp => i.clamp(0, n - 1),

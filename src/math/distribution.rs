@@ -79,7 +79,6 @@ impl Split {
     /// [`Split::next`] must then see in the same order); `None` when no weight is positive.
     #[inline(always)]
     pub fn new(range: u128, weights: impl IntoIterator<Item = f32> + Clone) -> Option<Self> {
-        debug_assert!(range <= RANGE);
         let sum = |infinite: bool| {
             weights.clone().into_iter().fold((0.0f64, 0u32), |(total, positive), w| {
                 let c = clean(w, infinite);
@@ -93,6 +92,25 @@ impl Split {
         if infinite {
             (total, positive) = sum(true);
         }
+        Self::with_totals(range, total, positive, infinite)
+    }
+
+    /// [`Split::new`] over an array, with the weights as the rule counts them, for
+    /// [`Split::next_counted`]: each weight is cleaned once, all of them side by side (the
+    /// light tree's nodes, where this is most of a level's work).
+    #[inline(always)]
+    pub fn over<const N: usize>(range: u128, weights: &[f32; N]) -> Option<(Self, [f64; N])> {
+        // The same test as `new`'s infinite total, without the sum.
+        let infinite = weights.contains(&f32::INFINITY);
+        let counted = if infinite { weights.map(|w| clean(w, true)) } else { weights.map(|w| clean(w, false)) };
+        let total = counted.iter().fold(0.0f64, |total, &c| total + c);
+        let positive = counted.iter().map(|&c| (c > 0.0) as u32).sum();
+        Self::with_totals(range, total, positive, infinite).map(|s| (s, counted))
+    }
+
+    #[inline(always)]
+    fn with_totals(range: u128, total: f64, positive: u32, infinite: bool) -> Option<Self> {
+        debug_assert!(range <= RANGE);
         if positive == 0 {
             return None;
         }
@@ -105,8 +123,13 @@ impl Split {
     /// The interval of the next weight: `start..end` as (start, end).
     #[inline(always)]
     pub fn next(&mut self, w: f32) -> (u128, u128) {
+        self.next_counted(clean(w, self.infinite))
+    }
+
+    /// [`Split::next`] for a weight as the rule counts it (from [`Split::over`]).
+    #[inline(always)]
+    pub fn next_counted(&mut self, c: f64) -> (u128, u128) {
         let start = self.end;
-        let c = clean(w, self.infinite);
         if c > 0.0 {
             self.acc += c;
             self.seen += 1;
@@ -360,6 +383,28 @@ mod tests {
     fn intervals(range: u128, weights: &[f32]) -> Vec<(u128, u128)> {
         let mut s = Split::new(range, weights.iter().copied()).unwrap();
         weights.iter().map(|&w| s.next(w)).collect()
+    }
+
+    #[test]
+    fn an_array_splits_as_its_sequence() {
+        let cases: [[f32; 8]; 6] = [
+            [1.0, 0.0, 3.5, 2.0, 0.0, 1e-30, 7.0, 0.25],
+            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 4.0],
+            [f32::NAN, -1.0, 2.0, f32::INFINITY, 0.0, 5.0, f32::INFINITY, 1.0],
+            [3e38, 3e38, 3e38, 1e-38, 0.0, 1.0, 2.0, 3.0],
+            [1.0; 8],
+            [0.0, -2.0, f32::NAN, 0.0, 0.0, 0.0, 0.0, 0.0],
+        ];
+        for w in cases {
+            for range in [RANGE, RANGE - 1, 1 << 40, 12345, 8, 3, 1] {
+                let Some((mut split, counted)) = Split::over(range, &w) else {
+                    assert!(Split::new(range, w).is_none(), "{w:?}");
+                    continue;
+                };
+                let by_array: Vec<_> = counted.iter().map(|&c| split.next_counted(c)).collect();
+                assert_eq!(by_array, intervals(range, &w), "{w:?} over {range}");
+            }
+        }
     }
 
     #[test]

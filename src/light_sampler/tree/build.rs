@@ -6,7 +6,7 @@
 //! pbrt's loop is O(12²) and never tries the split after bucket 0); cost
 //! `Kr · (M(left) + M(right))`, `M = φ · area · M_Ω`. Degenerate nodes (all centroids equal,
 //! no split with both sides filled) and nodes past a depth limit split at the median, so the
-//! tree's depth stays within what a 64-bit trail can hold. The two halves are built with
+//! tree's depth stays within what a trail can hold. The two halves are built with
 //! `rayon::join` above 4096 lights, and binning itself runs in parallel above 65536.
 //!
 //! Inner nodes live in one array indexed by their split position (Karras 2012): the node

@@ -1,11 +1,11 @@
-//! Collapsing the binary SAOH tree into 4-wide nodes, in parallel.
+//! Collapsing the binary SAOH tree into 8-wide nodes, in parallel.
 //!
-//! For each 4-wide node we choose which binary descendants become its (up to four) children
+//! For each 8-wide node we choose which binary descendants become its (up to eight) children
 //! so that Σ over lights of their depth (the expected number of nodes a sample visits, if
-//! lights were picked uniformly) plus a cost per node ([`node_cost`]) is smallest: a dynamic program
-//! over the cuts of the top three binary levels below each node, computed bottom-up once per
-//! binary node. Minimising the node count alone leaves SAOH's unbalanced subtrees deep (13
-//! levels for the 10⁴ windows of `street.ron` against 10). Every level of 4-wide nodes
+//! lights were picked uniformly) plus a cost per node ([`node_cost`]) is smallest: a dynamic
+//! program over the cuts below each node, its table (the best cost of a subtree given 1 to 8
+//! slots) computed bottom-up once per binary node. Minimising the node count alone leaves SAOH's unbalanced subtrees deep (13
+//! levels for the 10⁴ windows of `street.ron` against 10). Every level of 8-wide nodes
 //! consumes at least one binary level, so the binary depth limit bounds the trails.
 //!
 //! Both passes run subtrees of more than [`PARALLEL`] lights with rayon. Nodes are laid out
@@ -19,7 +19,7 @@ use rayon::prelude::*;
 
 use super::build::{BinNode, Child, Item};
 use super::compact::{Node, Quantizer};
-use super::{LEAF, MAX_DEPTH, NONE, WIDTH};
+use super::{LEAF, MAX_DEPTH, NONE, TRAIL_BITS, WIDTH};
 use crate::light::LightBounds;
 
 /// What a node costs, in light-levels, in the collapse's objective, for a tree over `lights`
@@ -46,21 +46,22 @@ pub struct Collapse<'a> {
     grid: Quantizer,
     /// [`node_cost`] of this tree.
     node_cost: u64,
-    /// Smallest objective (light depths + node costs) below each binary node, counted from a
-    /// 4-wide node made for it; filled bottom-up before emission.
-    cost: Vec<AtomicU64>,
-    /// Per light, its trail; each is written once.
-    trails: Vec<AtomicU64>,
+    /// Per binary node, for 1 to [`WIDTH`] slots: the smallest objective (light depths + node
+    /// costs) below it when it may occupy that many slots of the node above (one slot: it
+    /// becomes a wide node itself); filled bottom-up before emission.
+    slots: Vec<[AtomicU64; WIDTH]>,
+    /// Per light, its trail as low and high halves; each is written once.
+    trails: Vec<[AtomicU64; 2]>,
 }
 
-/// The 4-wide tree: nodes in depth-first preorder (the root first), per-light trails and the
+/// The 8-wide tree: nodes in depth-first preorder (the root first), per-light trails and the
 /// depth.
 pub struct Collapsed {
-    /// 4-wide nodes in preorder, the root first.
+    /// 8-wide nodes in preorder, the root first.
     pub nodes: Vec<Node>,
-    /// Per light: 2-bit child choices from the root, level 0 in the lowest bits.
-    pub trails: Vec<u64>,
-    /// Levels of 4-wide nodes.
+    /// Per light: [`TRAIL_BITS`]-bit child choices from the root, level 0 in the lowest bits.
+    pub trails: Vec<u128>,
+    /// Levels of 8-wide nodes.
     pub depth: u32,
 }
 
@@ -73,8 +74,8 @@ impl<'a> Collapse<'a> {
             items,
             grid,
             node_cost: node_cost(lights),
-            cost: (0..bin.len()).map(|_| AtomicU64::new(0)).collect(),
-            trails: (0..lights).map(|_| AtomicU64::new(0)).collect(),
+            slots: (0..bin.len()).map(|_| std::array::from_fn(|_| AtomicU64::new(0))).collect(),
+            trails: (0..lights).map(|_| [AtomicU64::new(0), AtomicU64::new(0)]).collect(),
         };
         for &r in roots {
             c.fill_costs(r);
@@ -95,7 +96,8 @@ impl<'a> Collapse<'a> {
             }
             _ => unreachable!("one or two parts"),
         };
-        let trails = c.trails.into_iter().map(AtomicU64::into_inner).collect();
+        let trails =
+            c.trails.into_iter().map(|[lo, hi]| (hi.into_inner() as u128) << 64 | lo.into_inner() as u128).collect();
         Collapsed { nodes, trails, depth }
     }
 
@@ -113,7 +115,7 @@ impl<'a> Collapse<'a> {
         }
     }
 
-    /// Fills `cost` for every binary node below and at `c`, children first.
+    /// Fills `slots` for every binary node below and at `c`, children first.
     fn fill_costs(&self, c: Child) {
         let Child::Node(n) = c else { return };
         let node = &self.bin[n as usize];
@@ -124,14 +126,17 @@ impl<'a> Collapse<'a> {
             self.fill_costs(a);
             self.fill_costs(b);
         }
-        let best = (1..WIDTH).map(|j| self.slot_cost(a, j) + self.slot_cost(b, WIDTH - j)).min().unwrap();
-        self.cost[n as usize].store(node.count as u64 + self.node_cost + best, Relaxed);
+        let split = |k: usize| (1..k).map(|j| self.slot_cost(a, j) + self.slot_cost(b, k - j)).min();
+        let own = node.count as u64 + self.node_cost + split(WIDTH).expect("WIDTH > 1");
+        for (k, slot) in (1..=WIDTH).zip(&self.slots[n as usize]) {
+            slot.store(split(k).map_or(own, |s| s.min(own)), Relaxed);
+        }
     }
 
-    /// Smallest objective below binary node `n` when it becomes a 4-wide node (each of its
+    /// Smallest objective below binary node `n` when it becomes a wide node (each of its
     /// lights is one level deeper for it, and the node costs `node_cost`).
     fn cost(&self, n: u32) -> u64 {
-        self.cost[n as usize].load(Relaxed)
+        self.slots[n as usize][0].load(Relaxed)
     }
 
     /// Smallest objective below the current node when entry `c` may occupy up to `k` of its
@@ -139,15 +144,7 @@ impl<'a> Collapse<'a> {
     fn slot_cost(&self, c: Child, k: usize) -> u64 {
         match c {
             Child::Item(_) => 0,
-            Child::Node(n) => {
-                let own = self.cost(n);
-                if k == 1 {
-                    return own;
-                }
-                let [a, b] = self.bin[n as usize].children;
-                let split = (1..k).map(|j| self.slot_cost(a, j) + self.slot_cost(b, k - j)).min().unwrap();
-                own.min(split)
-            }
+            Child::Node(n) => self.slots[n as usize][k - 1].load(Relaxed),
         }
     }
 
@@ -169,18 +166,18 @@ impl<'a> Collapse<'a> {
         out.push(c);
     }
 
-    /// Appends the 4-wide subtree for binary children `[a, b]` to `out` in depth-first
+    /// Appends the wide subtree for binary children `[a, b]` to `out` in depth-first
     /// preorder, its root at the current end of `out` and child indices relative to the start
-    /// of `out`. Returns the subtree's depth in 4-wide levels.
-    fn emit(&self, a: Child, b: Child, trail: u64, depth: u32, out: &mut Vec<Node>) -> u32 {
-        assert!(depth < MAX_DEPTH, "light tree deeper than its 64-bit trails");
+    /// of `out`. Returns the subtree's depth in wide levels.
+    fn emit(&self, a: Child, b: Child, trail: u128, depth: u32, out: &mut Vec<Node>) -> u32 {
+        assert!(depth < MAX_DEPTH, "light tree deeper than its trails");
         let j = (1..WIDTH).min_by_key(|&j| self.slot_cost(a, j) + self.slot_cost(b, WIDTH - j)).unwrap();
         let mut entries = Vec::with_capacity(WIDTH);
         self.slot_entries(a, j, &mut entries);
         self.slot_entries(b, WIDTH - j, &mut entries);
         let index = out.len();
         out.push(Node::empty());
-        let child_trail = |k: usize| trail | ((k as u64) << (2 * depth));
+        let child_trail = |k: usize| trail | ((k as u128) << (TRAIL_BITS * depth));
         // The subtree under inner entry k, appended to `out`; its depth.
         let subtree = |k: usize, n: u32, out: &mut Vec<Node>| {
             let [x, y] = self.bin[n as usize].children;
@@ -233,9 +230,11 @@ impl<'a> Collapse<'a> {
     }
 
     /// Records the trail of item `i`'s light; its child reference.
-    fn leaf(&self, i: u32, trail: u64) -> u32 {
+    fn leaf(&self, i: u32, trail: u128) -> u32 {
         let light = self.items[i as usize].light;
-        self.trails[light as usize].store(trail, Relaxed);
+        let [lo, hi] = &self.trails[light as usize];
+        lo.store(trail as u64, Relaxed);
+        hi.store((trail >> 64) as u64, Relaxed);
         LEAF | light
     }
 }

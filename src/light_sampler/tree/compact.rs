@@ -1,5 +1,5 @@
-//! The 128-byte tree node: four children's bounds, quantised, in structure-of-arrays form so
-//! that one decode feeds one SSE importance evaluation of all four.
+//! The 256-byte tree node: eight children's bounds, quantised, in structure-of-arrays form so
+//! that one decode feeds one 8-lane (AVX) importance evaluation of all eight.
 //!
 //! Every quantisation rounds outwards, so a decoded bound always contains the exact one:
 //! - boxes on a 16-bit grid over the tree's box, floored/ceiled plus one extra step each way
@@ -14,9 +14,9 @@
 //! `i16::MIN` (below −1, never a real cosine) a directional one.
 
 use super::{NONE, WIDTH};
-use crate::light::{BoundsPacket, LightBounds};
-use crate::math::{Vec3A, Vec4, safe_acos};
-use glam::BVec4A;
+use crate::light::{BoundsPacket, Lanes, LightBounds};
+use crate::math::{Vec3A, safe_acos};
+use wide::CmpLt;
 
 /// Angle added to θo to absorb the axis quantisation error.
 const AXIS_SLACK: f32 = 2e-4;
@@ -40,7 +40,7 @@ impl Quantizer {
     }
 }
 
-/// One 4-wide node (128 bytes, two cache lines).
+/// One 8-wide node (256 bytes, four cache lines).
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 pub struct Node {
@@ -67,32 +67,32 @@ fn round_snorm(x: f32) -> i16 {
     (x.clamp(-1.0, 1.0) * SNORM).round() as i16
 }
 
-/// Four u16 lanes as floats (one load, a zero-extending unpack and a convert with SSE2).
+/// Eight u16 lanes as floats (one load, a zero-extending widen and a convert with AVX2).
 #[inline(always)]
-fn lanes_u16(q: &[u16; WIDTH]) -> Vec4 {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: SSE2 is part of the x86_64 baseline; the load reads exactly the 8 bytes of `q`.
+fn lanes_u16(q: &[u16; WIDTH]) -> Lanes {
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+    // SAFETY: the build enables AVX2 (checked by `cfg`); the load reads exactly the 16 bytes of `q`.
     unsafe {
-        use std::arch::x86_64::{__m128i, _mm_cvtepi32_ps, _mm_loadl_epi64, _mm_setzero_si128, _mm_unpacklo_epi16};
-        let v = _mm_loadl_epi64(q.as_ptr().cast::<__m128i>());
-        Vec4::from(_mm_cvtepi32_ps(_mm_unpacklo_epi16(v, _mm_setzero_si128())))
+        use std::arch::x86_64::{__m128i, _mm_loadu_si128, _mm256_cvtepi32_ps, _mm256_cvtepu16_epi32};
+        let v = _mm256_cvtepi32_ps(_mm256_cvtepu16_epi32(_mm_loadu_si128(q.as_ptr().cast::<__m128i>())));
+        std::mem::transmute::<std::arch::x86_64::__m256, Lanes>(v)
     }
-    #[cfg(not(target_arch = "x86_64"))]
-    Vec4::new(q[0] as f32, q[1] as f32, q[2] as f32, q[3] as f32)
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+    Lanes::new(q.map(|x| x as f32))
 }
 
-/// Four signed-normalised i16 lanes as floats in [−1, 1] (sign-extending unpack with SSE2).
+/// Eight signed-normalised i16 lanes as floats in [−1, 1] (a sign-extending widen with AVX2).
 #[inline(always)]
-fn lanes_i16(q: &[i16; WIDTH]) -> Vec4 {
-    #[cfg(target_arch = "x86_64")]
+fn lanes_i16(q: &[i16; WIDTH]) -> Lanes {
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
     // SAFETY: as in `lanes_u16`.
     let v = unsafe {
-        use std::arch::x86_64::{__m128i, _mm_cvtepi32_ps, _mm_loadl_epi64, _mm_srai_epi32, _mm_unpacklo_epi16};
-        let v = _mm_loadl_epi64(q.as_ptr().cast::<__m128i>());
-        Vec4::from(_mm_cvtepi32_ps(_mm_srai_epi32::<16>(_mm_unpacklo_epi16(v, v))))
+        use std::arch::x86_64::{__m128i, _mm_loadu_si128, _mm256_cvtepi16_epi32, _mm256_cvtepi32_ps};
+        let v = _mm256_cvtepi32_ps(_mm256_cvtepi16_epi32(_mm_loadu_si128(q.as_ptr().cast::<__m128i>())));
+        std::mem::transmute::<std::arch::x86_64::__m256, Lanes>(v)
     };
-    #[cfg(not(target_arch = "x86_64"))]
-    let v = Vec4::new(q[0] as f32, q[1] as f32, q[2] as f32, q[3] as f32);
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+    let v = Lanes::new(q.map(|x| x as f32));
     v * (1.0 / SNORM)
 }
 
@@ -138,11 +138,12 @@ impl Node {
         let axis = |a: usize| {
             let (lo, hi) = (lanes_u16(&self.qlo[a]), lanes_u16(&self.qhi[a]));
             let s = 0.5 * grid.step[a];
-            (Vec4::splat(grid.origin[a]) + (lo + hi) * s, (hi - lo) * s)
+            (Lanes::splat(grid.origin[a]) + (lo + hi) * s, (hi - lo) * s)
         };
         let ((cx, hx), (cy, hy), (cz, hz)) = (axis(0), axis(1), axis(2));
-        let phi = Vec4::from_array(self.phi);
-        let infinite = [0, 1, 2, 3].map(|k| self.cos_e[k] == INFINITE_MARK);
+        let phi = Lanes::new(self.phi);
+        let cos_e = lanes_i16(&self.cos_e);
+
         BoundsPacket {
             cx,
             cy,
@@ -157,9 +158,10 @@ impl Node {
             wz: lanes_i16(&self.w[2]),
             cos_o: lanes_i16(&self.cos_o),
             sin_o: lanes_i16(&self.sin_o),
-            cos_e: lanes_i16(&self.cos_e),
-            two_sided: phi.cmplt(Vec4::ZERO),
-            infinite: BVec4A::from_array(infinite),
+            cos_e,
+            two_sided: phi.cmp_lt(Lanes::ZERO),
+            // The mark decodes below −1, where no real cosine lies.
+            infinite: cos_e.cmp_lt(Lanes::splat(-1.0)),
         }
     }
 }
@@ -170,8 +172,8 @@ mod tests {
     use crate::light::BoundsPacket;
 
     #[test]
-    fn node_is_two_cache_lines() {
-        assert_eq!(std::mem::size_of::<Node>(), 128);
+    fn node_is_four_cache_lines() {
+        assert_eq!(std::mem::size_of::<Node>(), 256);
     }
 
     #[test]
@@ -196,13 +198,15 @@ mod tests {
             node.set(0, 0, &b, &grid);
             let q = node.decode(&grid);
             let exact = BoundsPacket::new(&[b]);
-            assert!(q.r2.x >= exact.r2.x && q.two_sided.test(0) == b.two_sided && !q.infinite.test(0));
+            let lane0 = |v: Lanes| v.to_array()[0];
+            assert!(lane0(q.r2) >= lane0(exact.r2));
+            assert!((lane0(q.two_sided) != 0.0) == b.two_sided && lane0(q.infinite) == 0.0);
             let mut pairs = Vec::new();
             for j in 0..50 {
                 let s = j as f32 * 1.7;
                 let p = Vec3A::new(3.0 * s.sin(), 2.0 + 2.0 * (0.3 * s).cos(), 2.0 * (0.9 * s).sin());
                 let n = Vec3A::new((0.4 * s).cos(), s.sin(), 0.2).normalize();
-                let (a, e) = (q.importance(p, n).x, exact.importance(p, n).x);
+                let (a, e) = (lane0(q.importance(p, n)), lane0(exact.importance(p, n)));
                 // The zero test is what must be conservative; the value moves a little with
                 // the quantised centre (importance uses the centre distance, not the nearest
                 // point, so a larger enclosing sphere is not always more important).
@@ -236,9 +240,10 @@ mod tests {
         let mut node = Node::empty();
         node.set(2, 7, &b, &grid);
         let q = node.decode(&grid);
-        assert!(q.infinite.test(2) && !q.infinite.test(0));
-        let imp = q.importance(Vec3A::ZERO, Vec3A::Y);
-        assert!((imp.z - 2.0).abs() < 1e-3 && imp.x == 0.0);
-        assert_eq!(q.importance(Vec3A::ZERO, -Vec3A::Y).z, 0.0, "sun below the horizon");
+        let infinite = q.infinite.to_array();
+        assert!(infinite[2] != 0.0 && infinite[0] == 0.0);
+        let imp = q.importance(Vec3A::ZERO, Vec3A::Y).to_array();
+        assert!((imp[2] - 2.0).abs() < 1e-3 && imp[0] == 0.0);
+        assert_eq!(q.importance(Vec3A::ZERO, -Vec3A::Y).to_array()[2], 0.0, "sun below the horizon");
     }
 }

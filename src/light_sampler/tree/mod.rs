@@ -1,15 +1,17 @@
 //! `tree`: a light BVH that gives the per-point weighting of `local` in O(log n).
 //!
 //! Conty Estevez & Kulla 2018 as in pbrt-v4 and Cycles, with what those two miss:
-//! - **4-wide nodes with the children's bounds stored in the parent.** The binary SAOH tree
-//!   (`build.rs`) is collapsed so that one decision weighs four tighter clusters instead of
+//! - **8-wide nodes with the children's bounds stored in the parent.** The binary SAOH tree
+//!   (`build.rs`) is collapsed so that one decision weighs eight tighter clusters instead of
 //!   two looser ones (Psychopath and Luminary report wider trees sample better); a node is
-//!   128 bytes (`compact.rs`) and one SSE evaluation yields all four importances.
+//!   256 bytes (`compact.rs`) and one AVX evaluation yields all eight importances. A descent
+//!   is a chain of dependent steps, so fewer, wider levels are what makes it fast: against
+//!   4-wide nodes, see the performance page.
 //! - **One 64-bit number, split exactly down the tree**: each node shares the values that
 //!   reached it among its children by [`Split`], and passes the chosen child's run on, so
 //!   the stratification of `u` survives, 20+ levels do not collapse neighbouring `u` onto one
 //!   light, and a light's pmf is exactly the share of the 2⁶⁴ values that reach it.
-//! - **The pmf by replaying the light's path**: a 64-bit trail (2 bits per level) per light
+//! - **The pmf by replaying the light's path**: a 128-bit trail (3 bits per level) per light
 //!   leads to the same splits, so `pmf` reports bit for bit what `sample` does; the build
 //!   caps the depth so the trail cannot overflow (pbrt's 32-bit trail can).
 //! - **Directional lights inside the tree**: they form their own subtree under the root,
@@ -40,34 +42,40 @@ use crate::math::Vec3A;
 use crate::math::distribution::{RANGE, Split, even_interval, even_pick, probability};
 
 /// Children per node.
-pub const WIDTH: usize = 4;
+pub const WIDTH: usize = 8;
 /// Marks a child slot that holds a light, not a node.
 const LEAF: u32 = 1 << 31;
 /// An unused child slot.
 const NONE: u32 = u32::MAX;
-/// Levels a 64-bit trail of 2-bit choices can record.
-const MAX_DEPTH: u32 = 32;
+/// Bits a trail spends on a level's choice among [`WIDTH`] children.
+const TRAIL_BITS: u32 = WIDTH.trailing_zeros();
+/// Levels a 128-bit trail can record.
+const MAX_DEPTH: u32 = u128::BITS / TRAIL_BITS;
+/// Levels the binary tree may have below the root that joins its finite and directional
+/// parts: every collapsed level consumes at least one, so the trails cannot overflow.
+const BINARY_DEPTH: u32 = 31;
+const _: () = assert!(BINARY_DEPTH < MAX_DEPTH && WIDTH.is_power_of_two() && WIDTH == crate::light::LANES);
 
 /// Build statistics, for `info` and the render summary.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct TreeStats {
     /// Wall time of the build.
     pub build_time: Duration,
-    /// Number of 4-wide nodes.
+    /// Number of 8-wide nodes.
     pub nodes: usize,
-    /// Levels of 4-wide nodes from the root to the deepest light.
+    /// Levels of 8-wide nodes from the root to the deepest light.
     pub depth: u32,
     /// Bytes of nodes and trails.
     pub memory_bytes: usize,
 }
 
-/// The light BVH: quantised 4-wide nodes over the lights' bounds, sampled by splitting one
+/// The light BVH: quantised 8-wide nodes over the lights' bounds, sampled by splitting one
 /// 64-bit number down from the root.
 #[derive(Clone, Debug)]
 pub struct LightTree {
     nodes: Vec<Node>,
-    /// Per light: 2-bit child choices from the root, level 0 in the lowest bits.
-    trails: Vec<u64>,
+    /// Per light: [`TRAIL_BITS`]-bit child choices from the root, level 0 in the lowest bits.
+    trails: Vec<u128>,
     /// Per node: its lights' run in `order` (first, count), the count 0 unless their
     /// intensities are even enough to be chosen uniformly ([`EVEN_RATIO`]).
     spans: Vec<(u32, u32)>,
@@ -76,8 +84,15 @@ pub struct LightTree {
     /// Per light: its place in `order`.
     rank: Vec<u32>,
     grid: Quantizer,
+    /// Whether a descent fetches the next level's nodes and lights ahead ([`FETCH_AHEAD_FROM`]).
+    fetch_ahead: bool,
     stats: TreeStats,
 }
+
+/// Bytes of nodes from which a descent fetches every child node and light ahead while it
+/// weighs them: a tree beyond a core's L2 cache (10⁶ lights: 40 MB) misses it level after
+/// level, while a smaller one is in cache and the fetches only cost instructions.
+const FETCH_AHEAD_FROM: usize = 1 << 20;
 
 /// Changes the importances of node `node`'s children before they are split (a learned
 /// sampler's reweighting near the root). The same reweighting must be given to `sample`
@@ -98,8 +113,8 @@ impl Reweight for AsBuilt {
 }
 
 /// Weights of a node's children at `ctx` (0 for empty slots), reweighted, whether
-/// `reweight` changed them, and how `range` values split among them (`None` when every
-/// weight is 0).
+/// `reweight` changed them, and how `range` values split among them, with the weights as the
+/// split counts them (`None` when every weight is 0).
 #[inline(always)]
 fn children_split(
     nodes: &[Node],
@@ -108,10 +123,10 @@ fn children_split(
     ctx: &ShadingContext,
     range: u128,
     reweight: &impl Reweight,
-) -> Option<([f32; WIDTH], bool, Split)> {
+) -> Option<([f32; WIDTH], bool, Split, [f64; WIDTH])> {
     let mut imp = nodes[node].decode(grid).importance(ctx.p, ctx.n).to_array();
     let changed = reweight.reweight(node, &mut imp);
-    Split::new(range, imp).map(|s| (imp, changed, s))
+    Split::over(range, &imp).map(|(s, counted)| (imp, changed, s, counted))
 }
 
 /// A node whose lights' intensities φ differ by at most this factor may choose among them
@@ -200,7 +215,7 @@ impl LightTree {
         let grid = Quantizer::new(lo.min(hi), hi.max(lo));
 
         // Each part gets its own binary tree (depth ≤ 31, so that with the joining root the
-        // collapsed tree fits the 32 levels of a trail); a root joins them.
+        // collapsed tree fits the levels of a trail); a root joins them.
         let mut bin: Vec<BinNode> = Vec::new();
         let mut items: Vec<Item> = Vec::with_capacity(lights.len());
         let mut roots = Vec::new();
@@ -208,7 +223,7 @@ impl LightTree {
             if part.is_empty() {
                 continue;
             }
-            let (nodes, root, _) = build::build(&mut part, MAX_DEPTH - 1);
+            let (nodes, root, _) = build::build(&mut part, BINARY_DEPTH);
             let (node_base, item_base) = (bin.len() as u32, items.len() as u32);
             let shift = |c: Child| match c {
                 Child::Item(i) => Child::Item(i + item_base),
@@ -226,9 +241,10 @@ impl LightTree {
         });
         let (spans, order, rank) = runs(&nodes, &phi);
         let memory_bytes =
-            nodes.capacity() * std::mem::size_of::<Node>() + trails.capacity() * 8 + spans.len() * 8 + order.len() * 8;
+            nodes.capacity() * std::mem::size_of::<Node>() + trails.capacity() * 16 + spans.len() * 8 + order.len() * 8;
         let stats = TreeStats { build_time: start.elapsed(), nodes: nodes.len(), depth, memory_bytes };
-        Self { nodes, trails, spans, order, rank, grid, stats }
+        let fetch_ahead = nodes.len() * std::mem::size_of::<Node>() >= FETCH_AHEAD_FROM;
+        Self { nodes, trails, spans, order, rank, grid, fetch_ahead, stats }
     }
 
     /// Build statistics.
@@ -239,8 +255,9 @@ impl LightTree {
 
 impl LightTree {
     /// [`LightSampler::sample`], calling `leaf_hint(light)` for the lights among the
-    /// children of each node visited before choosing: the caller can start fetching the
-    /// light it will shade (at 10⁶ lights, otherwise a certain cache miss per sample).
+    /// children of each node visited before choosing (in a tree that outgrows the cache): the
+    /// caller can start fetching the light it will shade (at 10⁶ lights, otherwise a certain
+    /// cache miss per sample).
     #[inline]
     pub fn sample_hinting(&self, ctx: &ShadingContext, u: u64, leaf_hint: impl Fn(u32)) -> Option<SampledLight> {
         self.sample_reweighted(ctx, u, leaf_hint, &AsBuilt)
@@ -262,14 +279,17 @@ impl LightTree {
             let n = &self.nodes[node];
             // The chosen child is known only after the importances: fetch all children
             // meanwhile (the lower levels of a 10⁶-light tree miss every cache).
-            for &c in &n.children {
-                if c & LEAF == 0 {
-                    prefetch(&self.nodes, c as usize);
-                } else if c != NONE {
-                    leaf_hint(c & !LEAF);
+            if self.fetch_ahead {
+                for &c in &n.children {
+                    if c & LEAF == 0 {
+                        prefetch(&self.nodes, c as usize);
+                    } else if c != NONE {
+                        leaf_hint(c & !LEAF);
+                    }
                 }
             }
-            let (imp, changed, mut split) = children_split(&self.nodes, node, &self.grid, ctx, range, reweight)?;
+            let (imp, changed, mut split, counted) =
+                children_split(&self.nodes, node, &self.grid, ctx, range, reweight)?;
             if let Some(m) = self.flat(node, &imp).filter(|_| !changed) {
                 let k = even_pick(u, m, range);
                 let (a, b) = even_interval(k, m, range);
@@ -278,8 +298,9 @@ impl LightTree {
                 return Some(SampledLight { light: LightId(light), pmf: probability(width) });
             }
             // The child whose interval holds u (the intervals tile the range, so one does).
-            let (k, (start, end)) =
-                imp.iter().map(|&w| split.next(w)).enumerate().find(|(_, (_, end))| u < *end).expect("intervals tile");
+            let (k, (start, end)) = (counted.iter().map(|&c| split.next_counted(c)).enumerate())
+                .find(|(_, (_, end))| u < *end)
+                .expect("intervals tile");
             (u, range) = (u - start, end - start);
             let child = n.children[k];
             if child & LEAF != 0 {
@@ -311,13 +332,14 @@ impl LightTree {
         let (mut trail, mut start, mut range, mut node) = (self.trails[light.0 as usize], 0u128, RANGE, 0usize);
         for _ in 0..MAX_DEPTH {
             let n = &self.nodes[node];
-            let k = (trail & 3) as usize;
-            trail >>= 2;
+            let k = (trail % WIDTH as u128) as usize;
+            trail >>= TRAIL_BITS;
             // The path is known: fetch the next node while this one is evaluated.
-            if n.children[k] & LEAF == 0 {
+            if self.fetch_ahead && n.children[k] & LEAF == 0 {
                 prefetch(&self.nodes, n.children[k] as usize);
             }
-            let Some((imp, changed, mut split)) = children_split(&self.nodes, node, &self.grid, ctx, range, reweight)
+            let Some((imp, changed, mut split, counted)) =
+                children_split(&self.nodes, node, &self.grid, ctx, range, reweight)
             else {
                 return (start, start);
             };
@@ -326,7 +348,7 @@ impl LightTree {
                 let (a, b) = even_interval(k, m, range);
                 return (start + a, start + b);
             }
-            let (a, b) = imp[..=k].iter().map(|&w| split.next(w)).last().expect("k < WIDTH");
+            let (a, b) = counted[..=k].iter().map(|&c| split.next_counted(c)).last().expect("k < WIDTH");
             (start, range) = (start + a, b - a);
             let child = n.children[k];
             if child & LEAF != 0 || range == 0 {
@@ -421,10 +443,10 @@ mod tests {
     }
 
     #[test]
-    fn a_small_tree_is_as_shallow_as_four_wide_nodes_allow() {
-        // 81 equal lamps in a 9 × 9 ceiling grid (cornell-9x9.ron): 4⁴ ≥ 81 > 4³. Charging
-        // nodes in the collapse, as for large trees, left it 5 levels deep.
-        assert_eq!(LightTree::new(&equal_lamps(81, 9, 0.2)).stats().depth, 4);
+    fn a_small_tree_is_as_shallow_as_its_nodes_allow() {
+        // 81 equal lamps in a 9 × 9 ceiling grid (cornell-9x9.ron): 8³ ≥ 81 > 8². Charging
+        // nodes in the collapse, as for large trees, left 4-wide trees a level deeper.
+        assert_eq!(LightTree::new(&equal_lamps(81, 9, 0.2)).stats().depth, 3);
     }
 
     #[test]
