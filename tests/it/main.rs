@@ -10,6 +10,8 @@ mod display;
 mod docs;
 mod environment;
 mod formats;
+mod gltf_accessors;
+mod gltf_variants;
 mod lamps;
 mod light_points;
 mod light_samplers;

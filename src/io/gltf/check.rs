@@ -55,11 +55,14 @@ pub fn structure(file: &str, root: &Root) -> Result<()> {
         }
     }
     for (i, texture) in root.textures.iter().enumerate() {
-        if get(&root.images, texture.source).is_none() {
-            return Err(err(
-                format!("textures[{i}]"),
-                format!("uses image {}, which does not exist", texture.source.value()),
-            ));
+        let at = || format!("textures[{i}]");
+        let own = Some(texture.source.value()).filter(|&s| s != u32::MAX as usize);
+        let sources = texture_sources(texture.extensions.as_ref().map(|e| &e.others), own);
+        if sources.is_empty() {
+            return Err(err(at(), "has no image source (neither its own nor an extension's)".into()));
+        }
+        if let Some(bad) = sources.into_iter().find(|&s| s >= root.images.len()) {
+            return Err(err(at(), format!("uses image {bad}, which does not exist")));
         }
     }
     for (m, mesh) in root.meshes.iter().enumerate() {
@@ -75,6 +78,15 @@ pub fn structure(file: &str, root: &Root) -> Result<()> {
         }
     }
     check_node_forest(root).map_err(|(at, m)| err(at, m))
+}
+
+/// The images a texture may show: an extension's source first (`EXT_texture_webp`,
+/// `KHR_texture_basisu`: the form the file prefers), then its own `source` (the fallback, and
+/// the only source glTF requires).
+/// `extensions` are the texture's extension objects, `source` its own image.
+pub fn texture_sources(extensions: Option<&serde_json::Map<String, json::Value>>, source: Option<usize>) -> Vec<usize> {
+    let extension = extensions.into_iter().flat_map(|e| e.values());
+    extension.filter_map(|v| v.get("source")?.as_u64()).map(|s| s as usize).chain(source).collect()
 }
 
 /// `list[index]`, if it exists.

@@ -15,13 +15,16 @@
 //! decoded one by one: a missing or unreadable one is a warning and the materials that use it
 //! fall back to their factors.
 
+mod accessor;
 mod check;
+mod draco;
+mod meshopt;
 
 use std::collections::BTreeSet;
 use std::path::Path;
 use std::sync::Arc;
 
-use gltf::accessor::{DataType, Dimensions};
+use gltf::accessor::DataType;
 use gltf::mesh::{Mode, Semantic};
 use gltf::texture::{MagFilter, WrappingMode};
 
@@ -35,17 +38,29 @@ use crate::material::{AlphaMode, Image, Material, TextureRef};
 use crate::math::{Mat4, Rgb, Vec2, Vec3A};
 use crate::scene::description::{CameraDesc, CameraPlacement, InstanceDesc, LightDesc, MeshDesc, SceneDescription};
 
-/// Extensions myriad reads. Others are listed in one warning.
-const SUPPORTED: [&str; 8] = [
-    "KHR_materials_clearcoat",
-    "KHR_materials_transmission",
-    "KHR_materials_volume",
-    "KHR_materials_emissive_strength",
-    "KHR_materials_specular",
-    "KHR_materials_ior",
-    "KHR_texture_transform",
-    "KHR_lights_punctual",
+/// Extensions myriad reads, with what it does with each (`info` lists them). Others are
+/// named in one warning, and refused where the file requires them.
+pub const SUPPORTED: [(&str, &str); 14] = [
+    ("KHR_materials_clearcoat", "the Principled coat"),
+    ("KHR_materials_transmission", "glass and other transmission"),
+    ("KHR_materials_volume", "absorption inside transmissive solids"),
+    ("KHR_materials_emissive_strength", "emission above 1"),
+    ("KHR_materials_specular", "specular strength and tint"),
+    ("KHR_materials_ior", "the index of refraction"),
+    ("KHR_texture_transform", "texture offsets, rotations and scales"),
+    ("KHR_lights_punctual", "point, spot and directional lights"),
+    (draco::NAME, "Draco-compressed meshes, decoded"),
+    (meshopt::NAMES[0], "meshopt-compressed buffer views, decoded"),
+    (meshopt::NAMES[1], "meshopt-compressed buffer views, decoded"),
+    ("KHR_mesh_quantization", "integer positions, normals and texture coordinates"),
+    ("EXT_texture_webp", "WebP textures"),
+    ("KHR_texture_basisu", "its fallback image (Basis Universal is not decoded)"),
 ];
+
+/// What myriad does with extension `name`, if it reads it.
+pub fn handling(name: &str) -> Option<&'static str> {
+    SUPPORTED.iter().find(|(n, _)| *n == name).map(|(_, what)| *what)
+}
 
 /// Reads a glTF file.
 pub fn load(path: &Path, options: &LoadOptions) -> Result<SceneDescription> {
@@ -57,15 +72,26 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<SceneDescription> {
     let base = path.parent();
     check::structure(&file, raw.document.as_json())?;
     let external = check::external_files(&file, raw.document.as_json(), base)?;
-    let gltf = gltf::Gltf {
-        document: gltf::Document::from_json(raw.document.into_json()).map_err(|e| parse_error(&file, text, e))?,
-        blob: raw.blob,
-    };
-    let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob.clone()).map_err(|e| buffer_error(&file, e))?;
+    let mut json = raw.document.into_json();
+    if let Some(missing) = json.extensions_required.iter().find(|e| handling(e).is_none()) {
+        return Err(Error::scene(
+            &file,
+            "extensionsRequired",
+            format!("requires the extension {missing}, which myriad does not read; export the file without it"),
+        ));
+    }
+    // The crate's validation refuses required extensions it does not know itself; myriad
+    // reads these (checked just above).
+    json.extensions_required.clear();
+    validate(&json).map_err(|e| parse_error(&file, text, e))?;
+    let gltf = gltf::Gltf { document: gltf::Document::from_json_without_validation(json), blob: raw.blob };
+    let buffers = import_buffers(&gltf.document, base, gltf.blob.clone()).map_err(|e| buffer_error(&file, e))?;
+    let decoded = meshopt::decode_views(&gltf.document, &buffers).map_err(|(at, m)| Error::scene(&file, at, m))?;
+    let views = accessor::Views::new(&buffers, decoded);
     let generator = gltf.document.as_json().asset.generator.as_deref().unwrap_or("");
     let mut loader = Loader {
         file: &file,
-        buffers: &buffers,
+        views: &views,
         blender: generator.starts_with(BLENDER_GENERATOR) || generator.starts_with(ADDON_GENERATOR),
         desc: SceneDescription {
             source: file.clone(),
@@ -74,7 +100,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<SceneDescription> {
         },
     };
     let doc = &gltf.document;
-    let unsupported: Vec<&str> = doc.extensions_used().filter(|e| !SUPPORTED.contains(e)).collect();
+    let unsupported: Vec<&str> = doc.extensions_used().filter(|e| handling(e).is_none()).collect();
     if !unsupported.is_empty() {
         loader.warn(format!("ignores the extensions {unsupported:?} (rendered without them)"));
     }
@@ -83,6 +109,24 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<SceneDescription> {
     let primitives = loader.meshes(doc)?;
     loader.nodes(doc, &primitives, options)?;
     Ok(loader.desc)
+}
+
+/// The crate's validation, less its one rule stricter than the specification: an accessor
+/// without a buffer view is zeros (sparse values may replace some; a Draco primitive's
+/// accessors have none at all), not missing data.
+fn validate(json: &gltf::json::Root) -> gltf::Result<()> {
+    use gltf::json::validation::{Error as Invalid, Validate};
+    let mut errors = Vec::new();
+    json.validate(json, gltf::json::Path::new, &mut |path, error| {
+        let path = path();
+        let zeros = matches!(error, Invalid::Missing)
+            && path.as_str().starts_with("accessors[")
+            && path.as_str().ends_with("].bufferView");
+        if !zeros {
+            errors.push((path, error));
+        }
+    });
+    if errors.is_empty() { Ok(()) } else { Err(gltf::Error::Validation(errors)) }
 }
 
 /// A parse failure, explained: JSON syntax (line, column), GLB structure, validation (the
@@ -101,18 +145,36 @@ fn parse_error(file: &str, bytes: &[u8], e: gltf::Error) -> Error {
         gltf::Error::Binary(b) => Error::scene(file, "GLB container", format!("truncated or corrupt binary glTF: {b}")),
         gltf::Error::Validation(errors) => {
             let text: Vec<String> = errors.iter().take(5).map(|(path, err)| format!("{path}: {err}")).collect();
-            let draco = errors.iter().any(|(p, _)| p.to_string().contains("KHR_draco_mesh_compression"));
-            let message = if draco {
-                "its meshes are Draco-compressed (KHR_draco_mesh_compression), which myriad does not read; \
-                 export again with Draco compression off"
-                    .to_string()
-            } else {
-                format!("invalid glTF: {}", text.join("; "))
-            };
+            let message = format!("invalid glTF: {}", text.join("; "));
             Error::scene(file, errors.first().map_or("document".into(), |(p, _)| p.to_string()), message)
         }
         other => Error::scene(file, "file", other.to_string()),
     }
+}
+
+/// The data of every buffer: the GLB's binary chunk, a file or a data URI, and nothing for a
+/// placeholder a meshopt extension fills (`gltf::import_buffers` refuses those).
+fn import_buffers(
+    doc: &gltf::Document,
+    base: Option<&Path>,
+    mut blob: Option<Vec<u8>>,
+) -> gltf::Result<Vec<gltf::buffer::Data>> {
+    doc.buffers()
+        .map(|buffer| {
+            if meshopt::fallback_buffer(&buffer) && !matches!(buffer.source(), gltf::buffer::Source::Uri(_)) {
+                return Ok(gltf::buffer::Data(Vec::new()));
+            }
+            let data = gltf::buffer::Data::from_source_and_blob(buffer.source(), base, &mut blob)?;
+            if data.len() < buffer.length() {
+                return Err(gltf::Error::BufferLength {
+                    buffer: buffer.index(),
+                    expected: buffer.length(),
+                    actual: data.len(),
+                });
+            }
+            Ok(data)
+        })
+        .collect()
 }
 
 fn buffer_error(file: &str, e: gltf::Error) -> Error {
@@ -131,7 +193,7 @@ fn buffer_error(file: &str, e: gltf::Error) -> Error {
 
 struct Loader<'a> {
     file: &'a str,
-    buffers: &'a [gltf::buffer::Data],
+    views: &'a accessor::Views<'a>,
     desc: SceneDescription,
     /// Written by Blender's exporter: rendered as Cycles renders it after import.
     blender: bool,
@@ -199,7 +261,7 @@ impl Loader<'_> {
         Error::scene(self.file, location, message)
     }
 
-    /// Decodes every image; failures become warnings.
+    /// Decodes every image (PNG, JPEG, WebP, 8 or 16 bits); failures become warnings.
     fn images(&mut self, doc: &gltf::Document, base: Option<&Path>) -> ImageMap {
         let mut map = Vec::new();
         for img in doc.images() {
@@ -208,10 +270,22 @@ impl Loader<'_> {
                 (None, gltf::image::Source::Uri { uri, .. }) if !uri.starts_with("data:") => uri.to_string(),
                 (None, _) => format!("image {}", img.index()),
             };
-            match gltf::image::Data::from_source(img.source(), base, self.buffers) {
-                Ok(data) => {
-                    self.desc.images.push(to_image(name, data));
+            let mime = match img.source() {
+                gltf::image::Source::View { mime_type, .. } => Some(mime_type),
+                gltf::image::Source::Uri { mime_type, .. } => mime_type,
+            };
+            match self.image_bytes(&img, base).and_then(|bytes| decode_image(name.clone(), &bytes)) {
+                Ok(image) => {
+                    self.desc.images.push(image);
                     map.push(Some((self.desc.images.len() - 1) as u32));
+                }
+                Err(_) if mime == Some("image/ktx2") => {
+                    self.warn(format!(
+                        "images[{}] '{name}' is Basis Universal (KTX2), which myriad does not decode; textures use \
+                         the file's fallback image where it has one",
+                        img.index()
+                    ));
+                    map.push(None);
                 }
                 Err(e) => {
                     self.warn(format!(
@@ -225,6 +299,18 @@ impl Loader<'_> {
         map
     }
 
+    /// The encoded bytes of `img`: its buffer view's, or its URI's (a data URI or a file).
+    fn image_bytes(&self, img: &gltf::Image, base: Option<&Path>) -> std::result::Result<Vec<u8>, String> {
+        match img.source() {
+            gltf::image::Source::View { view, .. } => Ok(self.views.bytes(&view).to_vec()),
+            gltf::image::Source::Uri { uri, .. } => {
+                gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), base)
+                    .map(|d| d.0)
+                    .map_err(|e| e.to_string())
+            }
+        }
+    }
+
     fn texture(
         &mut self,
         tex: gltf::Texture,
@@ -235,7 +321,10 @@ impl Loader<'_> {
         if tex_coord != 0 {
             self.warn(format!("textures[{}] uses TEXCOORD_{tex_coord}; myriad reads TEXCOORD_0", tex.index()));
         }
-        let image = images.get(tex.source().index()).copied().flatten()?;
+        // The first source that decoded: an extension's (WebP), else the texture's own.
+        let image = check::texture_sources(tex.extensions(), tex.source().map(|i| i.index()))
+            .into_iter()
+            .find_map(|s| images.get(s).copied().flatten())?;
         let wrap = |w: WrappingMode| match w {
             WrappingMode::ClampToEdge => Wrap::Clamp,
             WrappingMode::MirroredRepeat => Wrap::Mirror,
@@ -338,24 +427,10 @@ impl Loader<'_> {
         });
     }
 
-    /// Checks an accessor's type and shape; its data range is checked when read.
-    fn check(&self, where_: &str, acc: &gltf::Accessor, types: &[DataType], dims: Dimensions) -> Result<()> {
-        let loc = format!("{where_}, accessor {}", acc.index());
-        if acc.count() == 0 {
-            return Err(self.err(loc, "has no elements"));
-        }
-        if !types.contains(&acc.data_type()) || acc.dimensions() != dims {
-            return Err(self
-                .err(loc, format!("is {:?} {:?}; expected {dims:?} of {types:?}", acc.dimensions(), acc.data_type())));
-        }
-        Ok(())
-    }
-
-    fn outside(&self, where_: &str, acc: &gltf::Accessor) -> Error {
-        self.err(
-            format!("{where_}, accessor {}", acc.index()),
-            "its data lies outside its buffer: the file is truncated or corrupt",
-        )
+    /// Reads accessor `acc` of a primitive as `D` floats an element, of the component types
+    /// `types` (f32, and the integers `KHR_mesh_quantization` allows there).
+    fn floats<const D: usize>(&self, where_: &str, acc: &gltf::Accessor, types: &[DataType]) -> Result<Vec<[f32; D]>> {
+        accessor::floats(self.views, acc, types).map_err(|m| self.err(format!("{where_}, accessor {}", acc.index()), m))
     }
 
     /// One mesh per triangle primitive; returns (glTF mesh, primitive) → mesh index.
@@ -368,18 +443,12 @@ impl Loader<'_> {
             for prim in mesh.primitives() {
                 let where_ =
                     format!("meshes[{}] '{}' primitive {}", mesh.index(), mesh.name().unwrap_or(""), prim.index());
-                if prim.extension_value("KHR_draco_mesh_compression").is_some() {
-                    return Err(self.err(
-                        where_,
-                        "is Draco-compressed (KHR_draco_mesh_compression), which myriad does not read; export with Draco off",
-                    ));
-                }
                 if !matches!(prim.mode(), Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
                     skipped.insert(format!("{} ({:?})", mesh.name().unwrap_or("unnamed"), prim.mode()));
                     prims.push(None);
                     continue;
                 }
-                let m = self.primitive(&where_, &prim, default_material)?;
+                let m = self.primitive(doc, &where_, &prim, default_material)?;
                 self.desc.meshes.push(m);
                 prims.push(Some((self.desc.meshes.len() - 1) as u32));
             }
@@ -391,56 +460,39 @@ impl Loader<'_> {
         Ok(map)
     }
 
-    fn primitive(&self, where_: &str, prim: &gltf::Primitive, default_material: u32) -> Result<MeshDesc> {
-        let reader = prim.reader(|b| self.buffers.get(b.index()).map(|d| d.0.as_slice()));
-        let pos = prim.get(&Semantic::Positions).ok_or_else(|| self.err(where_, "has no POSITION attribute"))?;
-        self.check(where_, &pos, &[DataType::F32], Dimensions::Vec3)?;
-        let positions: Vec<Vec3A> =
-            reader.read_positions().ok_or_else(|| self.outside(where_, &pos))?.map(Vec3A::from).collect();
+    fn primitive(
+        &self,
+        doc: &gltf::Document,
+        where_: &str,
+        prim: &gltf::Primitive,
+        default_material: u32,
+    ) -> Result<MeshDesc> {
+        let (positions, normals, uvs, indices) = match prim.extension_value(draco::NAME) {
+            Some(ext) => {
+                let d = draco::decode(doc, self.views, ext).map_err(|m| self.err(where_, m))?;
+                (d.positions, d.normals, d.uvs, Some(d.indices))
+            }
+            None => self.attributes(where_, prim)?,
+        };
+        let positions: Vec<Vec3A> = positions.into_iter().map(Vec3A::from).collect();
         let n = positions.len();
-        let normals = match prim.get(&Semantic::Normals) {
-            Some(acc) => {
-                self.check(where_, &acc, &[DataType::F32], Dimensions::Vec3)?;
-                let v: Vec<Vec3A> =
-                    reader.read_normals().ok_or_else(|| self.outside(where_, &acc))?.map(Vec3A::from).collect();
-                if v.len() != n {
-                    return Err(self.err(where_, format!("has {} normals for {n} positions", v.len())));
-                }
-                Some(v)
-            }
-            None => None,
-        };
-        let uvs = match prim.get(&Semantic::TexCoords(0)) {
-            Some(acc) => {
-                self.check(where_, &acc, &[DataType::F32, DataType::U8, DataType::U16], Dimensions::Vec2)?;
-                let v: Vec<Vec2> = reader
-                    .read_tex_coords(0)
-                    .ok_or_else(|| self.outside(where_, &acc))?
-                    .into_f32()
-                    .map(Vec2::from)
-                    .collect();
-                if v.len() != n {
-                    return Err(self.err(where_, format!("has {} texture coordinates for {n} positions", v.len())));
-                }
-                Some(v)
-            }
-            None => None,
-        };
-        let indices: Vec<u32> = match prim.indices() {
-            Some(acc) => {
-                self.check(where_, &acc, &[DataType::U8, DataType::U16, DataType::U32], Dimensions::Scalar)?;
-                let idx: Vec<u32> =
-                    reader.read_indices().ok_or_else(|| self.outside(where_, &acc))?.into_u32().collect();
-                if let Some(bad) = idx.iter().find(|&&i| i as usize >= n) {
-                    return Err(self.err(
-                        format!("{where_}, accessor {}", acc.index()),
-                        format!("index {bad} is out of range: the primitive has {n} vertices"),
-                    ));
-                }
-                idx
-            }
-            None => (0..n as u32).collect(),
-        };
+        if n == 0 {
+            return Err(self.err(where_, "has no vertices"));
+        }
+        if let Some(count) = normals.as_ref().map(Vec::len).filter(|&c| c != n) {
+            return Err(self.err(where_, format!("has {count} normals for {n} positions")));
+        }
+        if let Some(count) = uvs.as_ref().map(Vec::len).filter(|&c| c != n) {
+            return Err(self.err(where_, format!("has {count} texture coordinates for {n} positions")));
+        }
+        // Quantised normals (KHR_mesh_quantization, Draco) are only nearly unit length.
+        let unit = |n: Vec3A| if (n.length_squared() - 1.0).abs() > 1e-4 { n.normalize_or_zero() } else { n };
+        let normals = normals.map(|v| v.into_iter().map(|n| unit(Vec3A::from(n))).collect());
+        let uvs = uvs.map(|v| v.into_iter().map(Vec2::from).collect());
+        let indices = indices.unwrap_or_else(|| (0..n as u32).collect());
+        if let Some(bad) = indices.iter().find(|&&i| i as usize >= n) {
+            return Err(self.err(where_, format!("index {bad} is out of range: the primitive has {n} vertices")));
+        }
         let triangles: Vec<[u32; 3]> = match prim.mode() {
             Mode::TriangleStrip => (0..indices.len().saturating_sub(2))
                 .map(|i| {
@@ -457,6 +509,28 @@ impl Loader<'_> {
         let triangles = triangles.into_iter().filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]).collect();
         let material = prim.material().index().map_or(default_material, |i| i as u32);
         Ok(MeshDesc { name: where_.to_string(), positions, normals, uvs, triangles, material })
+    }
+
+    /// A primitive's positions, normals, texture coordinates and indices from its accessors.
+    #[allow(clippy::type_complexity)]
+    fn attributes(
+        &self,
+        where_: &str,
+        prim: &gltf::Primitive,
+    ) -> Result<(Vec<[f32; 3]>, Option<Vec<[f32; 3]>>, Option<Vec<[f32; 2]>>, Option<Vec<u32>>)> {
+        use DataType::{F32, I8, I16, U8, U16};
+        let pos = prim.get(&Semantic::Positions).ok_or_else(|| self.err(where_, "has no POSITION attribute"))?;
+        let positions = self.floats(where_, &pos, &[F32, I8, U8, I16, U16])?;
+        let normals = prim.get(&Semantic::Normals).map(|a| self.floats(where_, &a, &[F32, I8, I16])).transpose()?;
+        let uvs =
+            prim.get(&Semantic::TexCoords(0)).map(|a| self.floats(where_, &a, &[F32, I8, U8, I16, U16])).transpose()?;
+        let indices = prim
+            .indices()
+            .map(|a| {
+                accessor::indices(self.views, &a).map_err(|m| self.err(format!("{where_}, accessor {}", a.index()), m))
+            })
+            .transpose()?;
+        Ok((positions, normals, uvs, indices))
     }
 
     fn nodes(&mut self, doc: &gltf::Document, primitives: &[Vec<Option<u32>>], options: &LoadOptions) -> Result<()> {
@@ -603,32 +677,13 @@ fn khr_transform_json(v: &gltf::json::Value) -> UvTransform {
     UvTransform::from_khr(pair("offset", 0.0), rotation, pair("scale", 1.0))
 }
 
-/// glTF's decoded pixels (any of its formats) as 8-bit RGBA.
-fn to_image(name: String, data: gltf::image::Data) -> Image {
-    use gltf::image::Format::*;
-    let p = &data.pixels;
-    let u16_at = |i: usize| u16::from_le_bytes([p[2 * i], p[2 * i + 1]]);
-    let f32_at = |i: usize| f32::from_le_bytes([p[4 * i], p[4 * i + 1], p[4 * i + 2], p[4 * i + 3]]);
-    let texels = (data.width * data.height) as usize;
-    let rgba: Vec<u8> = (0..texels)
-        .flat_map(|t| -> [u8; 4] {
-            let hi = |i: usize| (u16_at(i) >> 8) as u8;
-            let fl = |i: usize| (f32_at(i).clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
-            match data.format {
-                R8 => [p[t], p[t], p[t], 255],
-                R8G8 => [p[2 * t], p[2 * t], p[2 * t], p[2 * t + 1]],
-                R8G8B8 => [p[3 * t], p[3 * t + 1], p[3 * t + 2], 255],
-                R8G8B8A8 => [p[4 * t], p[4 * t + 1], p[4 * t + 2], p[4 * t + 3]],
-                R16 => [hi(t), hi(t), hi(t), 255],
-                R16G16 => [hi(2 * t), hi(2 * t), hi(2 * t), hi(2 * t + 1)],
-                R16G16B16 => [hi(3 * t), hi(3 * t + 1), hi(3 * t + 2), 255],
-                R16G16B16A16 => [hi(4 * t), hi(4 * t + 1), hi(4 * t + 2), hi(4 * t + 3)],
-                R32G32B32FLOAT => [fl(3 * t), fl(3 * t + 1), fl(3 * t + 2), 255],
-                R32G32B32A32FLOAT => [fl(4 * t), fl(4 * t + 1), fl(4 * t + 2), fl(4 * t + 3)],
-            }
-        })
-        .collect();
-    from_rgba8(name, data.width, data.height, rgba)
+/// An encoded image (PNG, JPEG or WebP, by its bytes) as 8-bit RGBA; 16-bit channels keep
+/// their top bits.
+fn decode_image(name: String, bytes: &[u8]) -> std::result::Result<Image, String> {
+    let reader =
+        image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format().map_err(|e| e.to_string())?;
+    let rgba = reader.decode().map_err(|e| e.to_string())?.into_rgba8();
+    Ok(from_rgba8(name, rgba.width(), rgba.height(), rgba.into_raw()))
 }
 
 #[cfg(test)]
