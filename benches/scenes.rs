@@ -304,7 +304,7 @@ fn rays_per_tracer(c: &mut Criterion) {
     for name in ["lobby", "cornell_grid_7"] {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/data/blender/{name}.glb"));
         for &tracer in TracerKind::BUILT {
-            let options = BuildOptions { resolution: Some(resolution), camera: None, tracer };
+            let options = BuildOptions { resolution: Some(resolution), tracer, ..Default::default() };
             let scene = load_scene(Some(&path), &options.into()).unwrap().scene;
             let (camera, bounce, shadow) = render_rays(&scene, resolution);
             let label = |kind: &str| format!("{name} {kind} {}", tracer.name());

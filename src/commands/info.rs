@@ -22,7 +22,9 @@ pub struct InfoReport {
 
 /// Loads and builds the scene and its light tree, and gathers their statistics.
 pub fn info(path: Option<&Path>, options: &SceneOptions) -> Result<InfoReport> {
-    let loaded = load_scene(path, options)?;
+    let mut options = options.clone();
+    options.build.frame_without_camera = true;
+    let loaded = load_scene(path, &options)?;
     let learned = (!loaded.scene.lights.is_empty())
         .then(|| LearnedSampler::new(&loaded.scene.lights, loaded.scene.center, loaded.scene.radius));
     let (tree, learned) = (learned.as_ref().map(|l| l.tree().stats()), learned.map(|l| l.layout()));
@@ -109,6 +111,9 @@ impl fmt::Display for InfoReport {
                 LEARN_UNTIL,
                 human_bytes(l.max_bytes as u64)
             )?;
+        }
+        for (name, what) in &r.extensions {
+            writeln!(f, "extension    {name}: {what}")?;
         }
         for w in &r.warnings {
             writeln!(f, "warning      {w}")?;

@@ -82,6 +82,17 @@ pub fn render(opts: &RenderOptions) -> Result<RenderReport> {
         build: BuildOptions { resolution: opts.resolution, camera: opts.camera.clone(), ..Default::default() },
     };
     let loaded = load_scene(opts.scene.as_deref(), &scene_options)?;
+    if loaded.scene.geometry.triangle_count() == 0
+        && loaded.scene.lights.is_empty()
+        && loaded.scene.environment.is_none()
+    {
+        return Err(Error::scene(
+            &loaded.report.source,
+            "scene",
+            "holds nothing to render (no meshes, no lights, no environment): check that the export included the \
+             objects (in Blender's glTF exporter, Include › Limit to: off), or pick another scene with --gltf-scene",
+        ));
+    }
     let resolved = opts.settings.resolve(&loaded.report.render, DEFAULT_SPP)?;
     let (settings, sampler) = (resolved.render_settings(loaded.report.resolution, opts.aovs), resolved.sampler);
     let scene = &loaded.scene;

@@ -36,6 +36,9 @@ pub struct SceneDescription {
     pub lights: Vec<LightDesc>,
     /// Things the loader skipped or approximated, for the user.
     pub warnings: Vec<String>,
+    /// The file format's extensions the file uses (glTF's), each with what myriad does with
+    /// it ("ignored" where it does nothing), for `info`.
+    pub extensions: Vec<(String, String)>,
     /// Every file read to make it (the scene, its buffers, images, included meshes and
     /// material libraries), in the order read: what a cache of its renders depends on.
     pub inputs: Vec<PathBuf>,

@@ -70,6 +70,9 @@ pub struct SceneReport {
     pub stats: SceneStats,
     /// What the loader and the build skipped or approximated.
     pub warnings: Vec<String>,
+    /// The file's format extensions and what myriad does with each
+    /// ([`SceneDescription::extensions`]).
+    pub extensions: Vec<(String, String)>,
     /// Every file the scene was read from ([`SceneDescription::inputs`]).
     pub inputs: Vec<std::path::PathBuf>,
 }

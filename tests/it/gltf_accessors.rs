@@ -232,3 +232,51 @@ fn broken_compressed_streams_and_lying_sizes_are_errors_naming_the_element() {
     let e = load_error(dir.path(), "draco-corrupt.glb", &edited_glb(&draco, |_| {}, scramble));
     assert_mentions(&e, &["draco-corrupt.glb", "meshes[0]", "Draco"]);
 }
+
+#[test]
+fn info_lists_each_extension_with_what_myriad_does_with_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let glb = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf-variants/meshopt.glb");
+    let out = crate::split::ok(&["info", glb.to_str().unwrap()], dir.path());
+    for line in [
+        "extension    EXT_meshopt_compression: meshopt-compressed buffer views, decoded",
+        "extension    KHR_mesh_quantization: integer positions, normals and texture coordinates",
+        "extension    KHR_lights_punctual: point, spot and directional lights",
+    ] {
+        assert!(out.contains(line), "{out}");
+    }
+    let mut doc = crate::common::cornell_json();
+    doc["extensionsUsed"] = json!(["EXT_lights_ies"]);
+    let path = write(dir.path(), "ies.gltf", &doc);
+    let out = crate::split::ok(&["info", path.to_str().unwrap()], dir.path());
+    assert!(out.contains("extension    EXT_lights_ies: ignored"), "{out}");
+}
+
+#[test]
+fn a_moving_scene_renders_its_static_pose_with_one_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut doc = crate::common::cornell_json();
+    doc["skins"] = json!([{"joints": [0]}]);
+    doc["animations"] = json!([{"channels": [], "samplers": []}]);
+    let d = load(&write(dir.path(), "animated.gltf", &doc));
+    let pose: Vec<_> = d.warnings.iter().filter(|w| w.contains("static pose")).collect();
+    assert_eq!(pose.len(), 1, "{:?}", d.warnings);
+    assert!(pose[0].contains("1 animations") && pose[0].contains("1 skins"), "{pose:?}");
+}
+
+#[test]
+fn a_file_with_nothing_to_render_is_described_by_info_and_refused_by_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("empty.gltf");
+    std::fs::write(&path, r#"{"asset": {"version": "2.0"}}"#).unwrap();
+    let p = path.to_str().unwrap();
+    let out = crate::split::ok(&["info", p], dir.path());
+    assert!(out.contains("no scene and no nodes") && out.contains("no camera"), "{out}");
+    let out = crate::split::myriad(&["render", p, "--camera", "auto", "-o", "e.exr"], dir.path());
+    assert!(
+        !out.status.success() && crate::split::text(&out).contains("nothing to render"),
+        "{}",
+        crate::split::text(&out)
+    );
+    assert!(!dir.path().join("e.exr").exists());
+}

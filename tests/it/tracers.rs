@@ -16,7 +16,7 @@ use crate::render::render_with;
 use crate::split::{myriad, text};
 
 fn render(path: &Path, tracer: TracerKind) -> (Film, TracerKind) {
-    let build = BuildOptions { resolution: Some(UVec2::new(48, 36)), camera: None, tracer };
+    let build = BuildOptions { resolution: Some(UVec2::new(48, 36)), tracer, ..Default::default() };
     let loaded = load_scene(Some(path), &SceneOptions { build, load: Default::default() }).unwrap();
     let built = loaded.scene.geometry.accel.tracer();
     (render_with(&TestScene::from(loaded), LightSamplerKind::Tree, 16, 6, 3), built)

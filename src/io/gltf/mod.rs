@@ -100,6 +100,9 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<SceneDescription> {
         },
     };
     let doc = &gltf.document;
+    loader.desc.extensions =
+        doc.extensions_used().map(|e| (e.to_string(), handling(e).unwrap_or("ignored").to_string())).collect();
+    loader.static_pose(doc);
     let unsupported: Vec<&str> = doc.extensions_used().filter(|e| handling(e).is_none()).collect();
     if !unsupported.is_empty() {
         loader.warn(format!("ignores the extensions {unsupported:?} (rendered without them)"));
@@ -254,6 +257,27 @@ impl Loader<'_> {
                 LightExtras::default()
             }
             Err(_) => LightExtras::default(),
+        }
+    }
+
+    /// One warning for what moves a scene (animations, skins, morph targets): the file's
+    /// static pose is what renders.
+    fn static_pose(&mut self, doc: &gltf::Document) {
+        let morphs = doc.meshes().flat_map(|m| m.primitives()).filter(|p| p.morph_targets().next().is_some()).count();
+        let parts: Vec<String> = [
+            (doc.animations().count(), "animations"),
+            (doc.skins().count(), "skins"),
+            (morphs, "primitives with morph targets"),
+        ]
+        .into_iter()
+        .filter(|(n, _)| *n > 0)
+        .map(|(n, what)| format!("{n} {what}"))
+        .collect();
+        if !parts.is_empty() {
+            self.warn(format!(
+                "has {}; myriad renders the static pose (nodes as placed, meshes unmorphed)",
+                parts.join(", ")
+            ));
         }
     }
 
@@ -533,18 +557,39 @@ impl Loader<'_> {
         Ok((positions, normals, uvs, indices))
     }
 
+    /// A file without scenes (glTF allows it: a library of nodes): every node no other node
+    /// holds, as Blender's importer takes them, with a warning; none, if it has no nodes.
+    fn root_nodes<'d>(&mut self, doc: &'d gltf::Document) -> Vec<gltf::Node<'d>> {
+        let children: BTreeSet<usize> = doc.nodes().flat_map(|n| n.children()).map(|c| c.index()).collect();
+        let roots: Vec<gltf::Node> = doc.nodes().filter(|n| !children.contains(&n.index())).collect();
+        self.warn(if roots.is_empty() {
+            "holds no scene and no nodes: there is nothing to render".to_string()
+        } else {
+            format!("holds no scene; myriad renders its {} root nodes", roots.len())
+        });
+        roots
+    }
+
     fn nodes(&mut self, doc: &gltf::Document, primitives: &[Vec<Option<u32>>], options: &LoadOptions) -> Result<()> {
-        let scene = match options.gltf_scene {
-            Some(k) => doc.scenes().nth(k).ok_or_else(|| {
-                self.err("scenes", format!("has no scene {k}: the file holds {} (numbered from 0)", doc.scenes().len()))
-            })?,
-            None => doc
-                .default_scene()
-                .or_else(|| doc.scenes().next())
-                .ok_or_else(|| self.err("scenes", "the file holds no scene"))?,
+        let roots: Vec<gltf::Node> = match options.gltf_scene {
+            Some(k) => doc
+                .scenes()
+                .nth(k)
+                .ok_or_else(|| {
+                    self.err(
+                        "scenes",
+                        format!("has no scene {k}: the file holds {} (numbered from 0)", doc.scenes().len()),
+                    )
+                })?
+                .nodes()
+                .collect(),
+            None => match doc.default_scene().or_else(|| doc.scenes().next()) {
+                Some(scene) => scene.nodes().collect(),
+                None => self.root_nodes(doc),
+            },
         };
         // The hierarchy is a forest (`check.rs`): the walk visits each node once.
-        let mut stack: Vec<(gltf::Node, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+        let mut stack: Vec<(gltf::Node, Mat4)> = roots.into_iter().map(|n| (n, Mat4::IDENTITY)).collect();
         let (mut range_warned, mut ortho) = (false, Vec::new());
         while let Some((node, parent)) = stack.pop() {
             let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());

@@ -31,6 +31,9 @@ pub struct BuildOptions {
     pub camera: Option<String>,
     /// The ray tracer; default: `--tracer`, else MYRIAD_TRACER, else the fastest built.
     pub tracer: TracerKind,
+    /// Frame the whole scene, with a warning, when it has no camera and none is asked for,
+    /// instead of refusing it (`info` describes any scene; `render` needs a view).
+    pub frame_without_camera: bool,
 }
 
 /// Width used when neither the command line nor the scene gives a resolution.
@@ -52,6 +55,7 @@ fn choose_camera<'a>(desc: &'a SceneDescription, opts: &BuildOptions) -> Result<
                 format!("no camera named '{name}'; the scene has {names:?} (or pass --camera auto)"),
             )
         }),
+        None if desc.cameras.is_empty() && opts.frame_without_camera => Ok(None),
         None => desc.cameras.first().map(Some).ok_or_else(|| {
             Error::scene(
                 file,
@@ -188,6 +192,9 @@ pub fn build(mut desc: SceneDescription, opts: &BuildOptions) -> Result<(Scene, 
     };
     let mut warnings = desc.warnings.clone();
     warnings.extend(tracer_warning);
+    if desc.cameras.is_empty() && opts.camera.is_none() {
+        warnings.push("the scene has no camera; rendering it needs one, or --camera auto to frame it all".into());
+    }
     if degenerate_emitters > 0 {
         warnings.push(format!("{degenerate_emitters} emissive triangles have zero area and do not emit"));
     }
@@ -210,6 +217,7 @@ pub fn build(mut desc: SceneDescription, opts: &BuildOptions) -> Result<(Scene, 
         render: desc.render,
         stats,
         warnings,
+        extensions: desc.extensions.clone(),
         inputs: desc.inputs.clone(),
     };
     Ok((scene, report))
