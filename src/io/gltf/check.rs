@@ -58,9 +58,6 @@ pub fn structure(file: &str, root: &Root) -> Result<()> {
         let at = || format!("textures[{i}]");
         let own = Some(texture.source.value()).filter(|&s| s != u32::MAX as usize);
         let sources = texture_sources(texture.extensions.as_ref().map(|e| &e.others), own);
-        if sources.is_empty() {
-            return Err(err(at(), "has no image source (neither its own nor an extension's)".into()));
-        }
         if let Some(bad) = sources.into_iter().find(|&s| s >= root.images.len()) {
             return Err(err(at(), format!("uses image {bad}, which does not exist")));
         }

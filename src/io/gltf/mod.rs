@@ -19,6 +19,7 @@ mod accessor;
 mod check;
 mod draco;
 mod meshopt;
+mod tolerate;
 
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -68,11 +69,19 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<SceneDescription> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     // A JSON glTF saved with a byte-order mark is still JSON.
     let text = bytes.strip_prefix("\u{feff}".as_bytes()).unwrap_or(&bytes);
-    let raw = gltf::Gltf::from_slice_without_validation(text).map_err(|e| parse_error(&file, text, e))?;
+    let (json_bytes, blob) = if text.starts_with(b"glTF") {
+        let glb = gltf::binary::Glb::from_slice(text).map_err(|e| parse_error(&file, text, e))?;
+        (glb.json.into_owned(), glb.bin.map(|b| b.into_owned()))
+    } else {
+        (text.to_vec(), None)
+    };
+    let deserialize = |e| parse_error(&file, text, gltf::Error::Deserialize(e));
+    let mut value: serde_json::Value = serde_json::from_slice(&json_bytes).map_err(deserialize)?;
+    let tolerated = tolerate::tolerate(&mut value);
+    let mut json: gltf::json::Root = serde_json::from_value(value).map_err(deserialize)?;
     let base = path.parent();
-    check::structure(&file, raw.document.as_json())?;
-    let external = check::external_files(&file, raw.document.as_json(), base)?;
-    let mut json = raw.document.into_json();
+    check::structure(&file, &json)?;
+    let external = check::external_files(&file, &json, base)?;
     if let Some(missing) = json.extensions_required.iter().find(|e| handling(e).is_none()) {
         return Err(Error::scene(
             &file,
@@ -84,13 +93,14 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<SceneDescription> {
     // reads these (checked just above).
     json.extensions_required.clear();
     validate(&json).map_err(|e| parse_error(&file, text, e))?;
-    let gltf = gltf::Gltf { document: gltf::Document::from_json_without_validation(json), blob: raw.blob };
+    let gltf = gltf::Gltf { document: gltf::Document::from_json_without_validation(json), blob };
     let buffers = import_buffers(&gltf.document, base, gltf.blob.clone()).map_err(|e| buffer_error(&file, e))?;
     let decoded = meshopt::decode_views(&gltf.document, &buffers).map_err(|(at, m)| Error::scene(&file, at, m))?;
     let views = accessor::Views::new(&buffers, decoded);
     let generator = gltf.document.as_json().asset.generator.as_deref().unwrap_or("");
     let mut loader = Loader {
         file: &file,
+        tolerated,
         views: &views,
         blender: generator.starts_with(BLENDER_GENERATOR) || generator.starts_with(ADDON_GENERATOR),
         desc: SceneDescription {
@@ -103,6 +113,12 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<SceneDescription> {
     loader.desc.extensions =
         doc.extensions_used().map(|e| (e.to_string(), handling(e).unwrap_or("ignored").to_string())).collect();
     loader.static_pose(doc);
+    if !loader.tolerated.unknown_lights.is_empty() {
+        let which: Vec<usize> = loader.tolerated.unknown_lights.iter().copied().collect();
+        loader.warn(format!(
+            "skips KHR_lights_punctual lights {which:?}, whose type is none of directional, point, spot"
+        ));
+    }
     let unsupported: Vec<&str> = doc.extensions_used().filter(|e| handling(e).is_none()).collect();
     if !unsupported.is_empty() {
         loader.warn(format!("ignores the extensions {unsupported:?} (rendered without them)"));
@@ -122,10 +138,11 @@ fn validate(json: &gltf::json::Root) -> gltf::Result<()> {
     let mut errors = Vec::new();
     json.validate(json, gltf::json::Path::new, &mut |path, error| {
         let path = path();
-        let zeros = matches!(error, Invalid::Missing)
-            && path.as_str().starts_with("accessors[")
-            && path.as_str().ends_with("].bufferView");
-        if !zeros {
+        let p = path.as_str();
+        let zeros = matches!(error, Invalid::Missing) && p.starts_with("accessors[") && p.ends_with("].bufferView");
+        // A primitive without positions is valid (the loader skips it).
+        let no_position = matches!(error, Invalid::Missing) && p.ends_with(".attributes[\"POSITION\"]");
+        if !(zeros || no_position) {
             errors.push((path, error));
         }
     });
@@ -142,6 +159,8 @@ fn parse_error(file: &str, bytes: &[u8], e: gltf::Error) -> Error {
             "file",
             format!("is not a glTF file (neither binary GLB, which starts with 'glTF', nor JSON glTF): {j}"),
         ),
+        // Line 0: a type error found after parsing (the document as a whole).
+        gltf::Error::Deserialize(j) if j.line() == 0 => Error::scene(file, "document", format!("invalid glTF: {j}")),
         gltf::Error::Deserialize(j) => {
             Error::scene(file, format!("{}:{}", j.line(), j.column()), format!("invalid glTF JSON: {j}"))
         }
@@ -156,7 +175,8 @@ fn parse_error(file: &str, bytes: &[u8], e: gltf::Error) -> Error {
 }
 
 /// The data of every buffer: the GLB's binary chunk, a file or a data URI, and nothing for a
-/// placeholder a meshopt extension fills (`gltf::import_buffers` refuses those).
+/// placeholder a meshopt extension fills or one without a URI and no binary chunk to refer to
+/// (`gltf::import_buffers` refuses those; a view that reads one is an error where it is read).
 fn import_buffers(
     doc: &gltf::Document,
     base: Option<&Path>,
@@ -164,7 +184,8 @@ fn import_buffers(
 ) -> gltf::Result<Vec<gltf::buffer::Data>> {
     doc.buffers()
         .map(|buffer| {
-            if meshopt::fallback_buffer(&buffer) && !matches!(buffer.source(), gltf::buffer::Source::Uri(_)) {
+            let bin = matches!(buffer.source(), gltf::buffer::Source::Bin);
+            if bin && (meshopt::fallback_buffer(&buffer) || blob.is_none()) {
                 return Ok(gltf::buffer::Data(Vec::new()));
             }
             let data = gltf::buffer::Data::from_source_and_blob(buffer.source(), base, &mut blob)?;
@@ -196,6 +217,8 @@ fn buffer_error(file: &str, e: gltf::Error) -> Error {
 
 struct Loader<'a> {
     file: &'a str,
+    /// What `tolerate` changed in the document.
+    tolerated: tolerate::Tolerated,
     views: &'a accessor::Views<'a>,
     desc: SceneDescription,
     /// Written by Blender's exporter: rendered as Cycles renders it after import.
@@ -265,7 +288,7 @@ impl Loader<'_> {
     fn static_pose(&mut self, doc: &gltf::Document) {
         let morphs = doc.meshes().flat_map(|m| m.primitives()).filter(|p| p.morph_targets().next().is_some()).count();
         let parts: Vec<String> = [
-            (doc.animations().count(), "animations"),
+            (self.tolerated.animations, "animations"),
             (doc.skins().count(), "skins"),
             (morphs, "primitives with morph targets"),
         ]
@@ -346,9 +369,15 @@ impl Loader<'_> {
             self.warn(format!("textures[{}] uses TEXCOORD_{tex_coord}; myriad reads TEXCOORD_0", tex.index()));
         }
         // The first source that decoded: an extension's (WebP), else the texture's own.
-        let image = check::texture_sources(tex.extensions(), tex.source().map(|i| i.index()))
-            .into_iter()
-            .find_map(|s| images.get(s).copied().flatten())?;
+        let sources = check::texture_sources(tex.extensions(), tex.source().map(|i| i.index()));
+        if sources.is_empty() {
+            // glTF allows it (an application may supply the image): the factors stand.
+            let message = format!("textures[{}] has no image; materials using it keep their factors", tex.index());
+            if !self.desc.warnings.iter().any(|w| w.ends_with(&message)) {
+                self.warn(message);
+            }
+        }
+        let image = sources.into_iter().find_map(|s| images.get(s).copied().flatten())?;
         let wrap = |w: WrappingMode| match w {
             WrappingMode::ClampToEdge => Wrap::Clamp,
             WrappingMode::MirroredRepeat => Wrap::Mirror,
@@ -393,6 +422,19 @@ impl Loader<'_> {
         Some(Rgb::new(per_channel(color.x), per_channel(color.y), per_channel(color.z)) / distance)
     }
 
+    /// The index of refraction: `KHR_materials_ior`'s (1.5 without it). Its special value 0
+    /// (Fresnel reflectance 1 at every angle, for specular-glossiness conversions) becomes
+    /// the largest IOR myriad takes to be a mirror-like dielectric: 10⁴ (F0 = 0.9996).
+    fn ior(&mut self, m: &gltf::Material, material: &str) -> f32 {
+        match m.ior() {
+            Some(0.0) => {
+                self.warn(format!("material '{material}': KHR_materials_ior 0 (full reflection) renders as IOR 10000"));
+                1e4
+            }
+            ior => ior.unwrap_or(1.5),
+        }
+    }
+
     fn materials(&mut self, doc: &gltf::Document, images: &ImageMap) {
         for m in doc.materials() {
             let name = m.name().map_or_else(|| format!("material {}", m.index().unwrap_or(0)), str::to_string);
@@ -425,7 +467,7 @@ impl Loader<'_> {
                 roughness: pbr.roughness_factor(),
                 specular: m.specular().map_or(1.0, |s| s.specular_factor()),
                 specular_color: m.specular().map_or(Rgb::ONE, |s| Rgb::from(s.specular_color_factor())),
-                ior: m.ior().unwrap_or(1.5),
+                ior: self.ior(&m, &name),
                 transmission: m.transmission().map_or(0.0, |t| t.transmission_factor()),
                 thin: volume.is_none() && !self.blender,
                 absorption: volume.unwrap_or(Rgb::ZERO),
@@ -467,6 +509,11 @@ impl Loader<'_> {
             for prim in mesh.primitives() {
                 let where_ =
                     format!("meshes[{}] '{}' primitive {}", mesh.index(), mesh.name().unwrap_or(""), prim.index());
+                if prim.get(&Semantic::Positions).is_none() {
+                    skipped.insert(format!("{} (no POSITION)", mesh.name().unwrap_or("unnamed")));
+                    prims.push(None);
+                    continue;
+                }
                 if !matches!(prim.mode(), Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
                     skipped.insert(format!("{} ({:?})", mesh.name().unwrap_or("unnamed"), prim.mode()));
                     prims.push(None);
@@ -479,7 +526,7 @@ impl Loader<'_> {
             map.push(prims);
         }
         if !skipped.is_empty() {
-            self.warn(format!("skips point and line primitives: {skipped:?}"));
+            self.warn(format!("skips point and line primitives, and those without positions: {skipped:?}"));
         }
         Ok(map)
     }
@@ -613,7 +660,7 @@ impl Loader<'_> {
                     gltf::camera::Projection::Orthographic(_) => ortho.push(name.clone()),
                 }
             }
-            if let Some(light) = node.light() {
+            if let Some(light) = node.light().filter(|l| !self.tolerated.unknown_lights.contains(&l.index())) {
                 range_warned |= light.range().is_some();
                 let label: Arc<str> = Arc::from(light.name().unwrap_or(&name));
                 let position = Vec3A::from(world.w_axis.truncate());
