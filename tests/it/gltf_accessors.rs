@@ -133,6 +133,17 @@ fn a_texture_takes_its_image_from_an_extension_or_its_fallback() {
     let img = &d.images[tex.image as usize];
     assert_eq!((img.size.x, img.size.y, img.texels[0], img.texels[1]), (2, 1, [255, 0, 0, 255], [0, 0, 255, 255]));
 
+    // A 16-bit PNG: its top 8 bits.
+    let img =
+        image::ImageBuffer::<image::Rgba<u16>, _>::from_raw(2, 1, vec![65535u16, 0, 0, 65535, 0, 0, 32896, 65535])
+            .unwrap();
+    let mut png16 = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut png16, image::ImageFormat::Png).unwrap();
+    let doc = textured(json!([{"uri": data_uri("image/png", png16.get_ref())}]), json!({"source": 0}));
+    let d = load(&write(dir.path(), "png16.gltf", &doc));
+    let tex = d.materials[0].base_color_texture.expect("the 16-bit texture");
+    assert_eq!(d.images[tex.image as usize].texels[..2], [[255, 0, 0, 255], [0, 0, 128, 255]]);
+
     // A KTX2 image myriad cannot decode, and the PNG the file gives as its fallback.
     let png = data_uri("image/png", &two_texels(image::ImageFormat::Png));
     let images =

@@ -131,6 +131,9 @@ fn inputs() -> Vec<Input> {
         Input { name: "scene.glb", bytes: data("tests/data/blender/punctual.glb"), beside: vec![] },
         Input { name: "scene.glb", bytes: data("tests/data/blender/materials.glb"), beside: vec![] },
         Input { name: "scene.glb", bytes: data("tests/data/blender/glass.glb"), beside: vec![] },
+        // Compressed streams: Draco (draco-core) and meshopt (meshoptimizer) decode bytes.
+        Input { name: "scene.glb", bytes: data("tests/data/gltf-variants/draco.glb"), beside: vec![] },
+        Input { name: "scene.glb", bytes: data("tests/data/gltf-variants/meshopt.glb"), beside: vec![] },
         Input {
             name: "scene.ron",
             bytes: EVERYTHING_RON.as_bytes().to_vec(),
