@@ -324,9 +324,23 @@ impl EmbreeScene {
         }
     }
 
+    /// Whether Embree takes `ray` up to `t_max`: origin and direction components within its
+    /// `FLT_LARGE` (1.844·10¹⁸) and a distance that is not NaN. Its kernels assert this (the
+    /// Debian build aborts the process on such a ray, which a broken file's camera far
+    /// outside every sane size can send); such a ray meets nothing, as in the built-in tracer.
+    #[inline(always)]
+    fn traceable(ray: &Ray, t_max: f32) -> bool {
+        const LARGE: f32 = 1.844e18;
+        let finite = ray.origin.is_finite() && ray.dir.is_finite();
+        finite && ray.origin.abs().max(ray.dir.abs()).max_element() <= LARGE && t_max >= 0.0
+    }
+
     /// The closest hit with `t ∈ (0, t_max)` that `accept(block, tri, b1, b2)` keeps.
     #[inline]
     pub fn closest_hit(&self, ray: &Ray, t_max: f32, accept: &dyn Fn(u32, u32, f32, f32) -> bool) -> Option<RawHit> {
+        if !Self::traceable(ray, t_max) {
+            return None;
+        }
         let mut context = self.context(&accept);
         let mut rh = RtcRayHit {
             ray: Self::ray(ray, t_max),
@@ -351,6 +365,9 @@ impl EmbreeScene {
     /// True when something `accept` keeps lies on the ray within `t ∈ (0, t_max)`.
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32, accept: &dyn Fn(u32, u32, f32, f32) -> bool) -> bool {
+        if !Self::traceable(ray, t_max) {
+            return false;
+        }
         let mut context = self.context(&accept);
         let mut r = Self::ray(ray, t_max);
         // SAFETY: as for `closest_hit`.
