@@ -15,7 +15,14 @@ use glam::Quat;
 
 /// A camera position must be finite.
 fn check_position(name: &str, p: Vec3A) -> Result<(), String> {
-    if p.is_finite() { Ok(()) } else { Err(format!("its {name} {p} is not finite")) }
+    use crate::limits::MAX_COORDINATE;
+    if p.is_finite() && p.abs().max_element() <= MAX_COORDINATE {
+        Ok(())
+    } else {
+        Err(format!(
+            "its {name} {p} is not finite or lies beyond ±{MAX_COORDINATE} m (as no vertex may); scale the scene down"
+        ))
+    }
 }
 
 /// Which image dimension the field of view spans.
@@ -233,6 +240,17 @@ impl Camera {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_camera_beyond_the_largest_coordinate_is_refused() {
+        // Rays from there are beyond what the tracers take (Embree asserts below 1.8·10¹⁸).
+        let far = Vec3A::new(3e19, 0.0, 0.0);
+        let e = Camera::look_at(far, Vec3A::ZERO, Vec3A::Y, 0.8).unwrap_err();
+        assert!(e.contains("beyond"), "{e}");
+        let e = Camera::from_matrix(&Mat4::from_translation(glam::Vec3::new(0.0, -2e12, 0.0)), 0.8).unwrap_err();
+        assert!(e.contains("beyond"), "{e}");
+        assert!(Camera::look_at(Vec3A::new(0.0, 1.0, 5.0), Vec3A::ZERO, Vec3A::Y, 0.8).is_ok());
+    }
 
     #[test]
     fn centre_and_corners() {
