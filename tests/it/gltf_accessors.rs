@@ -292,7 +292,7 @@ fn a_file_with_nothing_to_render_is_described_by_info_and_refused_by_render() {
     assert!(!dir.path().join("e.exr").exists());
 }
 
-/// Valid files the glTF-Validator's samples hold that the `gltf` crate alone refuses (123 of
+/// Valid files the glTF-Validator's samples hold that the `gltf` crate alone refuses (125 of
 /// its 129 valid samples load; before these, 91).
 #[test]
 fn valid_files_the_strict_parser_refused_load_with_warnings() {
@@ -320,4 +320,17 @@ fn valid_files_the_strict_parser_refused_load_with_warnings() {
         assert!(d.warnings.iter().any(|w| w.contains(part)), "{part}: {:?}", d.warnings);
     }
     assert!(d.lights.is_empty() && d.materials[0].base_color_texture.is_none());
+}
+
+#[test]
+fn bytes_after_a_glb_and_a_buffer_on_the_web_that_nothing_reads_are_no_obstacle() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut glb = variant("plain.glb");
+    glb.push(0);
+    let path = dir.path().join("trailing.glb");
+    std::fs::write(&path, &glb).unwrap();
+    assert!(!load(&path).meshes.is_empty());
+    let mut doc = crate::common::cornell_json();
+    doc["buffers"].as_array_mut().unwrap().push(json!({"uri": "http://example.com/more.bin", "byteLength": 4}));
+    assert!(!load(&write(dir.path(), "web.gltf", &doc)).meshes.is_empty());
 }

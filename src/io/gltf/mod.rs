@@ -70,7 +70,11 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<SceneDescription> {
     // A JSON glTF saved with a byte-order mark is still JSON.
     let text = bytes.strip_prefix("\u{feff}".as_bytes()).unwrap_or(&bytes);
     let (json_bytes, blob) = if text.starts_with(b"glTF") {
-        let glb = gltf::binary::Glb::from_slice(text).map_err(|e| parse_error(&file, text, e))?;
+        // Bytes after the length the header declares are not part of the GLB (the crate
+        // would read them as a chunk): ignored.
+        let declared = text.get(8..12).map_or(text.len(), |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize);
+        let glb = gltf::binary::Glb::from_slice(&text[..declared.clamp(12.min(text.len()), text.len())])
+            .map_err(|e| parse_error(&file, text, e))?;
         (glb.json.into_owned(), glb.bin.map(|b| b.into_owned()))
     } else {
         (text.to_vec(), None)
@@ -188,7 +192,12 @@ fn import_buffers(
             if bin && (meshopt::fallback_buffer(&buffer) || blob.is_none()) {
                 return Ok(gltf::buffer::Data(Vec::new()));
             }
-            let data = gltf::buffer::Data::from_source_and_blob(buffer.source(), base, &mut blob)?;
+            let data = match gltf::buffer::Data::from_source_and_blob(buffer.source(), base, &mut blob) {
+                // An `http:` (or other) URI myriad does not fetch: no data, an error only
+                // where an accessor reads it (the glTF-Validator calls such files valid).
+                Err(gltf::Error::UnsupportedScheme) => return Ok(gltf::buffer::Data(Vec::new())),
+                other => other?,
+            };
             if data.len() < buffer.length() {
                 return Err(gltf::Error::BufferLength {
                     buffer: buffer.index(),
