@@ -317,6 +317,35 @@ pub fn blender(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/blender").join(name)
 }
 
+/// One scene of `tests/data/gltf-variants/` (tools/make_gltf_variants.py), by name.
+pub fn gltf_variant(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf-variants").join(format!("{name}.glb"))
+}
+
+/// A GLB's JSON chunk and the rest.
+pub fn split_glb(bytes: &[u8]) -> Option<(Value, Vec<u8>)> {
+    let len = u32::from_le_bytes(bytes.get(12..16)?.try_into().ok()?) as usize;
+    let json = serde_json::from_slice(bytes.get(20..20 + len)?).ok()?;
+    Some((json, bytes.get(20 + len..)?.to_vec()))
+}
+
+/// A GLB from a JSON chunk and the chunks after it, with consistent lengths.
+pub fn join_glb(json: &Value, rest: &[u8]) -> Vec<u8> {
+    let mut text = json.to_string().into_bytes();
+    while !text.len().is_multiple_of(4) {
+        text.push(b' ');
+    }
+    let total = 12 + 8 + text.len() + rest.len();
+    let mut out = b"glTF".to_vec();
+    out.extend(2u32.to_le_bytes());
+    out.extend((total as u32).to_le_bytes());
+    out.extend((text.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(text);
+    out.extend(rest);
+    out
+}
+
 /// One of the Cornell boxes in `tests/data/cornell/`, by extension.
 pub fn cornell(ext: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/cornell/cornell").with_extension(ext)

@@ -12,7 +12,7 @@ use myriad::math::{Vec2, Vec3A};
 use myriad::scene::description::SceneDescription;
 use serde_json::{Value, json};
 
-use crate::common::{assert_mentions, load_error};
+use crate::common::{assert_mentions, gltf_variant, join_glb, load_error, split_glb};
 
 /// A one-triangle glTF with `buffer` as a data URI, the given views and accessors, and a
 /// primitive using `attributes` (and `indices`, if any).
@@ -168,41 +168,23 @@ fn required_extensions_myriad_cannot_read_are_refused_and_used_ones_named() {
     assert_mentions(&e, &["required.gltf", "extensionsRequired", "EXT_lights_ies"]);
 }
 
-/// A GLB's JSON chunk, changed by `edit`, and its binary chunk changed by `bin`.
+/// A GLB's JSON chunk, changed by `edit`, and its binary chunk's data changed by `bin`.
 fn edited_glb(glb: &[u8], edit: impl FnOnce(&mut Value), bin: impl FnOnce(&mut [u8], &Value)) -> Vec<u8> {
-    let len = |at: usize| u32::from_le_bytes(glb[at..at + 4].try_into().unwrap()) as usize;
-    let json_len = len(12);
-    let mut doc: Value = serde_json::from_slice(&glb[20..20 + json_len]).unwrap();
-    let mut binary = glb[20 + json_len + 8..].to_vec();
-    bin(&mut binary, &doc);
+    let (mut doc, mut rest) = split_glb(glb).unwrap();
+    bin(&mut rest[8..], &doc); // past the BIN chunk's header
     edit(&mut doc);
-    let mut text = doc.to_string().into_bytes();
-    while !text.len().is_multiple_of(4) {
-        text.push(b' ');
-    }
-    let total = 12 + 8 + text.len() + 8 + binary.len();
-    let mut out = Vec::with_capacity(total);
-    out.extend(b"glTF");
-    out.extend(2u32.to_le_bytes());
-    out.extend((total as u32).to_le_bytes());
-    out.extend((text.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(text);
-    out.extend((binary.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(binary);
-    out
+    join_glb(&doc, &rest)
 }
 
 fn variant(name: &str) -> Vec<u8> {
-    std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf-variants").join(name)).unwrap()
+    std::fs::read(gltf_variant(name)).unwrap()
 }
 
 #[test]
 fn broken_compressed_streams_and_lying_sizes_are_errors_naming_the_element() {
     let dir = tempfile::tempdir().unwrap();
     // meshopt: the first compressed view's bytes overwritten.
-    let meshopt = variant("meshopt.glb");
+    let meshopt = variant("meshopt");
     let scramble = |bin: &mut [u8], doc: &Value| {
         let view = doc["bufferViews"]
             .as_array()
@@ -230,7 +212,7 @@ fn broken_compressed_streams_and_lying_sizes_are_errors_naming_the_element() {
     assert_mentions(&e, &["meshopt-huge.glb", "bufferViews[", "memory"]);
 
     // Draco: the stream's bytes after its header overwritten.
-    let draco = variant("draco.glb");
+    let draco = variant("draco");
     let scramble = |bin: &mut [u8], doc: &Value| {
         let view = &doc["bufferViews"]
             [doc["meshes"][0]["primitives"][0]["extensions"]["KHR_draco_mesh_compression"]["bufferView"]
@@ -247,7 +229,7 @@ fn broken_compressed_streams_and_lying_sizes_are_errors_naming_the_element() {
 #[test]
 fn info_lists_each_extension_with_what_myriad_does_with_it() {
     let dir = tempfile::tempdir().unwrap();
-    let glb = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf-variants/meshopt.glb");
+    let glb = gltf_variant("meshopt");
     let out = crate::split::ok(&["info", glb.to_str().unwrap()], dir.path());
     for line in [
         "extension    EXT_meshopt_compression: meshopt-compressed buffer views, decoded",
@@ -325,7 +307,7 @@ fn valid_files_the_strict_parser_refused_load_with_warnings() {
 #[test]
 fn bytes_after_a_glb_and_a_buffer_on_the_web_that_nothing_reads_are_no_obstacle() {
     let dir = tempfile::tempdir().unwrap();
-    let mut glb = variant("plain.glb");
+    let mut glb = variant("plain");
     glb.push(0);
     let path = dir.path().join("trailing.glb");
     std::fs::write(&path, &glb).unwrap();

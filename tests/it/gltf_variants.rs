@@ -3,8 +3,6 @@
 //! (`KHR_mesh_quantization`) and meshopt-compressed (`EXT_meshopt_compression`) repacks of
 //! the plain file. Every form holds the plain file's geometry and renders its picture.
 
-use std::path::{Path, PathBuf};
-
 use myriad::commands::{SceneOptions, load_scene};
 use myriad::film::Film;
 use myriad::io::{LoadOptions, load_scene as load_description};
@@ -12,18 +10,14 @@ use myriad::math::{Rgb, UVec2, Vec3A};
 use myriad::scene::BuildOptions;
 use myriad::settings::LightSamplerKind;
 
-use crate::common::TestScene;
+use crate::common::{TestScene, gltf_variant};
 use crate::render::render_with;
 
 const FORMS: [&str; 4] = ["draco", "webp", "quantized", "meshopt"];
 
-fn variant(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf-variants").join(format!("{name}.glb"))
-}
-
 fn render(name: &str) -> Film {
     let build = BuildOptions { resolution: Some(UVec2::new(64, 48)), ..Default::default() };
-    let loaded = load_scene(Some(&variant(name)), &SceneOptions { build, load: Default::default() }).unwrap();
+    let loaded = load_scene(Some(&gltf_variant(name)), &SceneOptions { build, load: Default::default() }).unwrap();
     assert!(loaded.report.warnings.is_empty(), "{name}: {:?}", loaded.report.warnings);
     render_with(&TestScene::from(loaded), LightSamplerKind::Tree, 32, 8, 5)
 }
@@ -65,7 +59,7 @@ fn every_form_renders_the_plain_files_picture() {
 /// quantised positions by their nodes.
 fn shape(name: &str) -> (usize, f32, [f32; 6]) {
     let build = BuildOptions { resolution: Some(UVec2::new(8, 6)), ..Default::default() };
-    let loaded = load_scene(Some(&variant(name)), &SceneOptions { build, load: Default::default() }).unwrap();
+    let loaded = load_scene(Some(&gltf_variant(name)), &SceneOptions { build, load: Default::default() }).unwrap();
     let (mut n, mut area) = (0, 0.0f32);
     let (mut lo, mut hi) = (Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN));
     for (t, _) in loaded.scene.geometry.world_triangles() {
@@ -92,7 +86,7 @@ fn the_compressed_forms_hold_the_plain_geometry() {
         );
     }
     for form in ["plain", "draco", "webp", "quantized", "meshopt"] {
-        let d = load_description(&variant(form), &LoadOptions::default()).unwrap();
+        let d = load_description(&gltf_variant(form), &LoadOptions::default()).unwrap();
         // gltfpack drops texture coordinates where no texture reads them: the sphere keeps its.
         assert!(d.meshes.iter().all(|m| m.normals.is_some()), "{form}: normals");
         assert!(d.meshes.iter().any(|m| m.uvs.is_some()), "{form}: texture coordinates");

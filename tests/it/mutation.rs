@@ -19,6 +19,8 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
+use crate::common::{join_glb, split_glb};
+
 /// SplitMix64: the cases are a pure function of their number.
 struct Rng(u64);
 
@@ -268,30 +270,6 @@ fn number_spans(line: &str) -> Vec<(usize, usize)> {
         }
     }
     spans
-}
-
-/// A GLB's JSON chunk and the rest.
-fn split_glb(bytes: &[u8]) -> Option<(Value, Vec<u8>)> {
-    let len = u32::from_le_bytes(bytes.get(12..16)?.try_into().ok()?) as usize;
-    let json = serde_json::from_slice(bytes.get(20..20 + len)?).ok()?;
-    Some((json, bytes.get(20 + len..)?.to_vec()))
-}
-
-/// A GLB from a JSON chunk and the chunks after it, with consistent lengths.
-fn join_glb(json: &Value, rest: &[u8]) -> Vec<u8> {
-    let mut text = json.to_string().into_bytes();
-    while !text.len().is_multiple_of(4) {
-        text.push(b' ');
-    }
-    let total = 12 + 8 + text.len() + rest.len();
-    let mut out = b"glTF".to_vec();
-    out.extend(2u32.to_le_bytes());
-    out.extend((total as u32).to_le_bytes());
-    out.extend((text.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(text);
-    out.extend(rest);
-    out
 }
 
 /// One mutation of binary data: truncated, a bit flipped, a byte zeroed or saturated (in the

@@ -30,12 +30,12 @@ use gltf::mesh::{Mode, Semantic};
 use gltf::texture::{MagFilter, WrappingMode};
 
 use super::LoadOptions;
-use super::image_file::from_rgba8;
+use super::image_file;
 use crate::camera::Fit;
 use crate::error::{Error, Result};
 use crate::light::{LampModel, SpotCurve};
 use crate::material::texture::{UvTransform, Wrap};
-use crate::material::{AlphaMode, Image, Material, TextureRef};
+use crate::material::{AlphaMode, Material, TextureRef};
 use crate::math::{Mat4, Rgb, Vec2, Vec3A};
 use crate::scene::description::{CameraDesc, CameraPlacement, InstanceDesc, LightDesc, MeshDesc, SceneDescription};
 
@@ -330,7 +330,7 @@ impl Loader<'_> {
                 gltf::image::Source::View { mime_type, .. } => Some(mime_type),
                 gltf::image::Source::Uri { mime_type, .. } => mime_type,
             };
-            match self.image_bytes(&img, base).and_then(|bytes| decode_image(name.clone(), &bytes)) {
+            match self.image_bytes(&img, base).and_then(|bytes| image_file::decode(name.clone(), &bytes)) {
                 Ok(image) => {
                     self.desc.images.push(image);
                     map.push(Some((self.desc.images.len() - 1) as u32));
@@ -776,15 +776,6 @@ fn khr_transform_json(v: &gltf::json::Value) -> UvTransform {
     };
     let rotation = v.get("rotation").and_then(|r| r.as_f64()).unwrap_or(0.0) as f32;
     UvTransform::from_khr(pair("offset", 0.0), rotation, pair("scale", 1.0))
-}
-
-/// An encoded image (PNG, JPEG or WebP, by its bytes) as 8-bit RGBA; 16-bit channels keep
-/// their top bits.
-fn decode_image(name: String, bytes: &[u8]) -> std::result::Result<Image, String> {
-    let reader =
-        image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format().map_err(|e| e.to_string())?;
-    let rgba = reader.decode().map_err(|e| e.to_string())?.into_rgba8();
-    Ok(from_rgba8(name, rgba.width(), rgba.height(), rgba.into_raw()))
 }
 
 #[cfg(test)]

@@ -240,8 +240,10 @@ impl LightTree {
             phi
         });
         let (spans, order, rank) = runs(&nodes, &phi);
-        let memory_bytes =
-            nodes.capacity() * std::mem::size_of::<Node>() + trails.capacity() * 16 + spans.len() * 8 + order.len() * 8;
+        let memory_bytes = nodes.capacity() * std::mem::size_of::<Node>()
+            + trails.capacity() * std::mem::size_of::<u128>()
+            + spans.len() * 8
+            + order.len() * 8;
         let stats = TreeStats { build_time: start.elapsed(), nodes: nodes.len(), depth, memory_bytes };
         let fetch_ahead = nodes.len() * std::mem::size_of::<Node>() >= FETCH_AHEAD_FROM;
         Self { nodes, trails, spans, order, rank, grid, fetch_ahead, stats }
