@@ -2,8 +2,9 @@
 //!
 //! Owns: [`GeometryBuilder`] (collects world-space triangles into one flattened block, and
 //! shared meshes once each with their instances), [`Geometry`] (the built form: [`Accel`]
-//! plus per-triangle [`TriangleInfo`] in BVH order per block, and indexed vertex normals and
-//! UVs) and the closest-hit query that turns a raw hit into a [`SurfaceHit`] in world space.
+//! plus per-triangle [`TriangleInfo`] in BVH order per block, and indexed vertex normals, UVs
+//! and, for anisotropic materials, tangents) and the closest-hit query that turns a raw hit
+//! into a [`SurfaceHit`] in world space.
 //! Block 0 is always the flattened world-space one.
 
 use std::time::Instant;
@@ -57,6 +58,8 @@ pub struct GeometryBuilder {
     placements: Vec<(u32, Mat4)>,
     normals: Vec<Vec3A>,
     uvs: Vec<Vec2>,
+    /// Empty until a mesh brings tangents; then as long as `normals`.
+    tangents: Vec<Vec3A>,
 }
 
 impl GeometryBuilder {
@@ -68,7 +71,26 @@ impl GeometryBuilder {
     /// Appends per-vertex normals and UVs (either may be absent; absent UVs read as zero) and
     /// returns the index of the first, for [`Attributes::base`].
     pub fn push_vertices(&mut self, normals: Option<&[Vec3A]>, uvs: Option<&[Vec2]>, count: usize) -> u32 {
+        self.push_vertices_with_tangents(normals, uvs, None, count)
+    }
+
+    /// [`push_vertices`](Self::push_vertices) with tangents (transformed as normals are).
+    pub fn push_vertices_with_tangents(
+        &mut self,
+        normals: Option<&[Vec3A]>,
+        uvs: Option<&[Vec2]>,
+        tangents: Option<&[Vec3A]>,
+        count: usize,
+    ) -> u32 {
         let base = self.normals.len() as u32;
+        match tangents {
+            Some(t) => {
+                self.tangents.resize(base as usize, Vec3A::ZERO);
+                self.tangents.extend_from_slice(&t[..count]);
+            }
+            None if !self.tangents.is_empty() => self.tangents.resize(base as usize + count, Vec3A::ZERO),
+            None => {}
+        }
         match normals {
             Some(n) => self.normals.extend_from_slice(&n[..count]),
             None => self.normals.resize(self.normals.len() + count, Vec3A::ZERO),
@@ -160,7 +182,8 @@ impl GeometryBuilder {
         match Accel::new_embree(blases, &self.placements, &blocks_masked, start.elapsed()) {
             Ok(accel) => {
                 let info = self.blocks.into_iter().map(|b| b.info).collect();
-                (Geometry { accel, info, normals: self.normals, uvs: self.uvs, masked }, None)
+                let (normals, uvs, tangents) = (self.normals, self.uvs, self.tangents);
+                (Geometry { accel, info, normals, uvs, tangents, masked }, None)
             }
             Err(why) => {
                 let why = format!("{why}: traced with the built-in tracer instead");
@@ -178,7 +201,7 @@ impl GeometryBuilder {
             blases.push(blas);
         }
         let accel = Accel::new(blases, &self.placements, start.elapsed());
-        Geometry { accel, info: infos, normals: self.normals, uvs: self.uvs, masked }
+        Geometry { accel, info: infos, normals: self.normals, uvs: self.uvs, tangents: self.tangents, masked }
     }
 }
 
@@ -190,6 +213,8 @@ pub struct Geometry {
     info: Vec<Vec<TriangleInfo>>,
     normals: Vec<Vec3A>,
     uvs: Vec<Vec2>,
+    /// Per-vertex tangents (empty when no mesh has them).
+    tangents: Vec<Vec3A>,
     /// Whether any triangle is alpha-masked; without one, traversal asks nothing per
     /// candidate hit (its shading record would be a memory access per triangle tested).
     masked: bool,
@@ -212,6 +237,7 @@ impl Geometry {
             + self.info.iter().map(|i| i.capacity() * std::mem::size_of::<TriangleInfo>()).sum::<usize>()
             + self.normals.capacity() * std::mem::size_of::<Vec3A>()
             + self.uvs.capacity() * std::mem::size_of::<Vec2>()
+            + self.tangents.capacity() * std::mem::size_of::<Vec3A>()
     }
 
     /// The shading record of triangle `tri` of block `blas`.
@@ -292,6 +318,28 @@ impl Geometry {
         position_derivatives(p, info.attr.map(|i| self.uvs[i as usize]))
     }
 
+    /// The tangent its mesh carries at `p` on `triangle` (world space, not normalised; zero
+    /// where the mesh has none): asked for only by anisotropic materials.
+    pub fn tangent_at(&self, triangle: TriangleRef, p: Vec3A) -> Vec3A {
+        let inst = &self.accel.instances()[triangle.instance as usize];
+        let info = self.info(inst.blas, triangle.tri);
+        if info.attr.iter().any(|&i| i as usize >= self.tangents.len()) {
+            return Vec3A::ZERO;
+        }
+        let t = info.attr.map(|i| self.tangents[i as usize]);
+        let [v0, v1, v2] = world_vertices(inst, self.accel.blases()[inst.blas as usize].vertices(triangle.tri));
+        // Barycentrics of p by areas (p lies on the triangle).
+        let n = (v1 - v0).cross(v2 - v0);
+        let area = n.length_squared();
+        if !(area > 0.0) {
+            return Vec3A::ZERO;
+        }
+        let b1 = (p - v0).cross(v2 - v0).dot(n) / area;
+        let b2 = (v1 - v0).cross(p - v0).dot(n) / area;
+        let local = t[0] * (1.0 - b1 - b2) + t[1] * b1 + t[2] * b2;
+        if inst.identity { local } else { inst.normal_matrix * local }
+    }
+
     /// True when something not cut out blocks the segment from `origin` to
     /// `origin + dir·t_max`.
     #[inline]
@@ -309,6 +357,20 @@ impl Geometry {
 #[inline]
 fn world_vertices(inst: &Instance, v: [Vec3A; 3]) -> [Vec3A; 3] {
     if inst.identity { v } else { v.map(|p| inst.to_world.transform_point3a(p)) }
+}
+
+/// Blender's default tangent at each of a mesh's vertices (object space, not normalised):
+/// around the vertical axis through the centre of the mesh's bounding box, each axis scaled
+/// by the box's size along it, as Cycles' radial tangent about the object's Z over its
+/// generated coordinates, with glTF's +Y up where Blender has +Z. Anisotropic materials
+/// without a direction texture stretch along it ([`Material::tangent`](crate::material::Material::tangent)).
+pub fn radial_tangents(positions: &[Vec3A]) -> Vec<Vec3A> {
+    let (lo, hi) =
+        positions.iter().fold((Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN)), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    let center = (lo + hi) * 0.5;
+    // Blender's texture space: a flat side counts as size 1, a tiny one as 1e-5.
+    let size = ((hi - lo) * 0.5).to_array().map(|s| if s == 0.0 { 1.0 } else { s.max(1e-5) });
+    positions.iter().map(|&p| Vec3A::new((p.z - center.z) / size[2], 0.0, -(p.x - center.x) / size[0])).collect()
 }
 
 /// dp/du and dp/dv of a triangle from its positions and texture coordinates (zero when the

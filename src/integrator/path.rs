@@ -229,7 +229,14 @@ pub fn radiance(
             hit.uv,
             &scene.images,
         );
-        let sp = ShadingPoint::new(bsdf, hit.n_geom, n_shading, wo);
+        let tangent = material.tangent(
+            n_shading,
+            || scene.geometry.tangent_at(hit.triangle, hit.p),
+            || scene.geometry.position_derivatives(hit.triangle),
+            hit.uv,
+            &scene.images,
+        );
+        let sp = ShadingPoint::new(bsdf, hit.n_geom, n_shading, tangent, wo);
 
         if !scene.lights.is_empty() {
             l += beta * estimate_direct(scene, strategy, &sp, hit.p, medium, stream, depth, tally);

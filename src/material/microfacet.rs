@@ -1,8 +1,11 @@
-//! The isotropic GGX (Trowbridge-Reitz) microfacet distribution, in the local frame.
+//! The GGX (Trowbridge-Reitz) microfacet distribution, in the local frame, isotropic or
+//! stretched along the frame's x and y axes.
 //!
 //! Owns: D, Smith Λ/G1/G2 (height-correlated), and visible-normal sampling (Heitz 2018,
 //! "Sampling the GGX Distribution of Visible Normals", JCGT 7(4)) with its density.
-//! `alpha = roughness²` as glTF defines it (docs/conventions.md).
+//! `alpha = roughness²` as glTF defines it (docs/conventions.md); Blender's Anisotropic
+//! stretches it as Cycles does: α_x = α/√(1 − 0.9·anisotropic) along the tangent,
+//! α_y = α·√(1 − 0.9·anisotropic) across it.
 
 use crate::math::{Vec2, Vec3A};
 use std::f32::consts::PI;
@@ -10,17 +13,41 @@ use std::f32::consts::PI;
 /// Smallest alpha we evaluate: below it D overflows f32 at the peak. 1e-3 reads as a mirror.
 pub const MIN_ALPHA: f32 = 1e-3;
 
-/// GGX distribution of roughness `alpha`.
+/// GGX distribution of widths `alpha_x` along the local x axis and `alpha_y` along y.
 #[derive(Clone, Copy, Debug)]
 pub struct Ggx {
-    /// Width parameter (roughness²), at least [`MIN_ALPHA`].
-    pub alpha: f32,
+    /// Width along x (roughness² when isotropic), in [[`MIN_ALPHA`], 1].
+    pub alpha_x: f32,
+    /// Width along y.
+    pub alpha_y: f32,
 }
 
 impl Ggx {
-    /// The distribution for glTF perceptual `roughness`.
+    /// The isotropic distribution for glTF perceptual `roughness`.
     pub fn from_roughness(roughness: f32) -> Self {
-        Self { alpha: (roughness * roughness).max(MIN_ALPHA) }
+        Self::anisotropic(roughness, 0.0)
+    }
+
+    /// The distribution for perceptual `roughness` and Blender's `anisotropic` (in [0, 1]),
+    /// stretched along the local x axis (the tangent).
+    pub fn anisotropic(roughness: f32, anisotropic: f32) -> Self {
+        let alpha = roughness * roughness;
+        let aspect = (1.0 - 0.9 * anisotropic.clamp(0.0, 1.0)).sqrt();
+        let width = |a: f32| a.clamp(MIN_ALPHA, 1.0);
+        Self { alpha_x: width(alpha / aspect), alpha_y: width(alpha * aspect) }
+    }
+
+    /// The perceptual roughness of the isotropic lobe its energy tables read: (α_x·α_y)^¼,
+    /// as Cycles.
+    #[inline]
+    pub fn table_roughness(&self) -> f32 {
+        (self.alpha_x * self.alpha_y).sqrt().sqrt()
+    }
+
+    /// Whether it is the same along x and y.
+    #[inline]
+    pub fn is_isotropic(&self) -> bool {
+        self.alpha_x == self.alpha_y
     }
 
     /// Normal distribution D(h).
@@ -29,10 +56,9 @@ impl Ggx {
         if h.z <= 0.0 {
             return 0.0;
         }
-        let a2 = self.alpha * self.alpha;
-        let c2 = h.z * h.z;
-        let t = c2 * (a2 - 1.0) + 1.0;
-        a2 / (PI * t * t)
+        let (x, y) = (h.x / self.alpha_x, h.y / self.alpha_y);
+        let t = x * x + y * y + h.z * h.z;
+        1.0 / (PI * self.alpha_x * self.alpha_y * t * t)
     }
 
     /// Smith Λ(w).
@@ -42,8 +68,8 @@ impl Ggx {
         if c2 == 0.0 {
             return f32::INFINITY;
         }
-        let tan2 = ((1.0 - c2) / c2).max(0.0);
-        0.5 * ((1.0 + self.alpha * self.alpha * tan2).sqrt() - 1.0)
+        let (x, y) = (self.alpha_x * w.x, self.alpha_y * w.y);
+        0.5 * ((1.0 + (x * x + y * y) / c2).sqrt() - 1.0)
     }
 
     /// Masking G1(w).
@@ -61,8 +87,8 @@ impl Ggx {
     /// A microfacet normal visible from `wo` (wo.z > 0).
     #[inline]
     pub fn sample_visible_normal(&self, wo: Vec3A, u: Vec2) -> Vec3A {
-        let a = self.alpha;
-        let vh = Vec3A::new(a * wo.x, a * wo.y, wo.z).normalize();
+        let (ax, ay) = (self.alpha_x, self.alpha_y);
+        let vh = Vec3A::new(ax * wo.x, ay * wo.y, wo.z).normalize();
         let lensq = vh.x * vh.x + vh.y * vh.y;
         let t1 = if lensq > 0.0 { Vec3A::new(-vh.y, vh.x, 0.0) / lensq.sqrt() } else { Vec3A::X };
         let t2 = vh.cross(t1);
@@ -72,7 +98,7 @@ impl Ggx {
         let s = 0.5 * (1.0 + vh.z);
         let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * phi.sin();
         let nh = t1 * p1 + t2 * p2 + vh * (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
-        Vec3A::new(a * nh.x, a * nh.y, nh.z.max(0.0)).normalize()
+        Vec3A::new(ax * nh.x, ay * nh.y, nh.z.max(0.0)).normalize()
     }
 
     /// Solid-angle density of the reflected direction `wi` when `h` was drawn by
@@ -119,6 +145,28 @@ mod tests {
                 .sum();
             let v = 2.0 * std::f64::consts::PI * sum;
             assert!((v - 1.0).abs() < 1e-3, "roughness {roughness}: {v}");
+        }
+    }
+
+    #[test]
+    fn an_anisotropic_distribution_keeps_unit_projected_area() {
+        // ∫ D(h) cos θh dω over (cos θ, φ) by the midpoint rule: stretching keeps the area.
+        for (roughness, anisotropic) in [(0.4f32, 0.5f32), (0.7, 1.0)] {
+            let g = Ggx::anisotropic(roughness, anisotropic);
+            assert!(g.alpha_x > g.alpha_y && !g.is_isotropic());
+            let (nz, nphi) = (2000, 400);
+            let mut sum = 0.0f64;
+            for i in 0..nz {
+                let z = (i as f64 + 0.5) / nz as f64;
+                let r = (1.0 - z * z).sqrt();
+                for k in 0..nphi {
+                    let phi = (k as f64 + 0.5) / nphi as f64 * std::f64::consts::TAU;
+                    let h = Vec3A::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
+                    sum += g.d(h) as f64 * z;
+                }
+            }
+            let v = sum * std::f64::consts::TAU / (nz * nphi) as f64;
+            assert!((v - 1.0).abs() < 2e-3, "roughness {roughness}, anisotropic {anisotropic}: {v}");
         }
     }
 

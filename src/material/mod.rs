@@ -13,6 +13,7 @@ mod diffuse;
 pub mod fresnel;
 mod microfacet;
 mod principled;
+mod sheen;
 pub mod tables;
 pub mod texture;
 
@@ -178,6 +179,25 @@ pub struct Material {
     pub emission_texture: Option<TextureRef>,
     /// Tangent-space normal map, with its `scale`.
     pub normal_texture: Option<(TextureRef, f32)>,
+    /// Sheen colour (KHR_materials_sheen `sheenColorFactor`; Blender's Sheen Weight × Sheen
+    /// Tint), ≥ 0; black is no sheen.
+    pub sheen_color: Rgb,
+    /// Sheen roughness in [0, 1].
+    pub sheen_roughness: f32,
+    /// Multiplies the sheen colour (sRGB).
+    pub sheen_color_texture: Option<TextureRef>,
+    /// Its alpha multiplies the sheen roughness.
+    pub sheen_roughness_texture: Option<TextureRef>,
+    /// Anisotropy of the metal and specular layer in [0, 1] (KHR_materials_anisotropy
+    /// `anisotropyStrength`, Blender's Anisotropic).
+    pub anisotropy: f32,
+    /// Angle from the tangent to the direction of the anisotropy, counter-clockwise about the
+    /// normal, radians.
+    pub anisotropy_rotation: f32,
+    /// Red and green (to [−1, 1]) turn the anisotropy by their direction in tangent space,
+    /// blue multiplies its strength (linear). With it the tangent follows the UVs; without,
+    /// it runs around the mesh's vertical (Blender's default, [`Material::tangent`]).
+    pub anisotropy_texture: Option<TextureRef>,
     /// How alpha makes the surface see-through.
     pub alpha: AlphaMode,
     /// What the loader read but myriad does not render (properties, extensions), for `info`.
@@ -220,6 +240,13 @@ impl Material {
             metallic_roughness_texture: None,
             emission_texture: None,
             normal_texture: None,
+            sheen_color: Rgb::ZERO,
+            sheen_roughness: 0.0,
+            sheen_color_texture: None,
+            sheen_roughness_texture: None,
+            anisotropy: 0.0,
+            anisotropy_rotation: 0.0,
+            anisotropy_texture: None,
             alpha: AlphaMode::Opaque,
             ignored: Vec::new(),
         }
@@ -238,10 +265,56 @@ impl Material {
             _ if self.transmission > 0.0 && self.metallic < 1.0 && self.thin => "thin glass",
             _ if self.transmission > 0.0 && self.metallic < 1.0 && self.absorption != Rgb::ZERO => "glass + volume",
             _ if self.transmission > 0.0 && self.metallic < 1.0 => "glass",
-            _ if self.metallic == 0.0 && self.specular == 0.0 && self.coat == 0.0 => "lambert",
+            _ if self.is_lambertian() => "lambert",
             _ if self.coat > 0.0 => "principled + coat",
+            _ if self.sheen_color != Rgb::ZERO => "principled + sheen",
+            _ if self.anisotropy > 0.0 => "principled, anisotropic",
             _ => "principled",
         }
+    }
+
+    /// True when it reflects as Lambert's BSDF alone (whatever its textures say).
+    fn is_lambertian(&self) -> bool {
+        self.metallic == 0.0
+            && self.specular == 0.0
+            && self.coat == 0.0
+            && self.transmission == 0.0
+            && self.sheen_color == Rgb::ZERO
+    }
+
+    /// Whether its tangent runs around the mesh's vertical (anisotropic without a direction
+    /// texture): the meshes it covers then carry [`radial tangents`](crate::geometry::radial_tangents).
+    pub fn needs_radial_tangents(&self) -> bool {
+        self.anisotropy > 0.0 && self.anisotropy_texture.is_none()
+    }
+
+    /// The direction the anisotropy stretches along at `uv`, on the surface of (mapped) normal
+    /// `n`, or `None` where it is isotropic. As Cycles' Principled BSDF after Blender's glTF
+    /// import: the tangent is dp/du of the triangle (`derivatives`) with a direction texture,
+    /// else the mesh's radial tangent (`radial`), projected onto the surface and turned by
+    /// the rotation (and the texture's direction) about `n`.
+    #[inline]
+    pub fn tangent(
+        &self,
+        n: Vec3A,
+        radial: impl FnOnce() -> Vec3A,
+        derivatives: impl FnOnce() -> (Vec3A, Vec3A),
+        uv: Vec2,
+        images: &[Image],
+    ) -> Option<Vec3A> {
+        if !(self.anisotropy > 0.0) {
+            return None;
+        }
+        let (t, angle) = match &self.anisotropy_texture {
+            Some(tex) => {
+                let v = tex.sample(images, uv);
+                (derivatives().0, self.anisotropy_rotation + (2.0 * v.y - 1.0).atan2(2.0 * v.x - 1.0))
+            }
+            None => (radial(), self.anisotropy_rotation),
+        };
+        let t = (t - n * n.dot(t)).try_normalize()?;
+        let (sin, cos) = angle.sin_cos();
+        Some(t * cos + n.cross(t) * sin)
     }
 
     /// True when the surface emits light.
@@ -303,20 +376,53 @@ impl Material {
             roughness *= v.y;
             metallic *= v.z;
         }
-        if metallic == 0.0 && self.specular == 0.0 && self.coat == 0.0 && self.transmission == 0.0 {
+        if metallic == 0.0 && self.is_lambertian() {
             if base.max_element() <= 0.0 {
                 return None;
             }
             return Some(Bsdf::Diffuse(Diffuse { albedo: base }));
         }
         let p = Principled::new(base, metallic, roughness, self.ior, self.specular, self.specular_color)
-            .with_coat(self.coat, self.coat_roughness);
+            .with_coat(self.coat, self.coat_roughness)
+            .with_anisotropy(self.anisotropy_at(uv, images))
+            .with_sheen(self.sheen_at(uv, images), self.sheen_roughness_at(uv, images));
         let p = if self.thin {
             p.with_thin_transmission(self.transmission, self.ior)
         } else {
             p.with_transmission(self.transmission, if entering { self.ior } else { 1.0 / self.ior })
         };
         Some(Bsdf::Principled(p))
+    }
+}
+
+impl Material {
+    /// Anisotropy at `uv`.
+    #[inline]
+    fn anisotropy_at(&self, uv: Vec2, images: &[Image]) -> f32 {
+        match &self.anisotropy_texture {
+            Some(t) if self.anisotropy > 0.0 => self.anisotropy * t.sample(images, uv).z,
+            _ => self.anisotropy,
+        }
+    }
+
+    /// Sheen colour at `uv`.
+    #[inline]
+    fn sheen_at(&self, uv: Vec2, images: &[Image]) -> Rgb {
+        match &self.sheen_color_texture {
+            Some(t) if self.sheen_color != Rgb::ZERO => {
+                self.sheen_color * Rgb::from(t.sample_srgb(images, uv).truncate())
+            }
+            _ => self.sheen_color,
+        }
+    }
+
+    /// Sheen roughness at `uv`.
+    #[inline]
+    fn sheen_roughness_at(&self, uv: Vec2, images: &[Image]) -> f32 {
+        match &self.sheen_roughness_texture {
+            Some(t) if self.sheen_color != Rgb::ZERO => self.sheen_roughness * t.sample(images, uv).w,
+            _ => self.sheen_roughness,
+        }
     }
 }
 
@@ -335,12 +441,16 @@ pub struct ShadingPoint {
 }
 
 impl ShadingPoint {
-    /// Orients the normals towards `wo` (unit, pointing away from the surface).
+    /// Orients the normals towards `wo` (unit, pointing away from the surface); the local x
+    /// axis is `tangent` where the BSDF is anisotropic (a unit vector across `n_shading`).
     #[inline]
-    pub fn new(bsdf: Bsdf, n_geom: Vec3A, n_shading: Vec3A, wo: Vec3A) -> Self {
+    pub fn new(bsdf: Bsdf, n_geom: Vec3A, n_shading: Vec3A, tangent: Option<Vec3A>, wo: Vec3A) -> Self {
         let n_geom = if n_geom.dot(wo) < 0.0 { -n_geom } else { n_geom };
         let ns = if n_shading.dot(n_geom) < 0.0 { -n_shading } else { n_shading };
-        let frame = Frame::from_normal(ns);
+        let frame = match tangent {
+            Some(t) => Frame::from_normal_tangent(ns, t),
+            None => Frame::from_normal(ns),
+        };
         Self { frame, n_geom, bsdf: bsdf.at(frame.to_local(wo)), transmits: bsdf.transmits() }
     }
 
@@ -458,11 +568,11 @@ mod tests {
     #[test]
     fn only_bsdfs_that_choose_lobes_read_the_lobe_number() {
         let (n, wo) = (Vec3A::Z, Vec3A::new(0.3, 0.1, 0.9).normalize());
-        let lambert = ShadingPoint::new(Bsdf::Diffuse(Diffuse { albedo: Rgb::splat(0.5) }), n, n, wo);
+        let lambert = ShadingPoint::new(Bsdf::Diffuse(Diffuse { albedo: Rgb::splat(0.5) }), n, n, None, wo);
         assert!(!lambert.chooses_lobes());
         assert_eq!(directions(&lambert, 0.01), directions(&lambert, 0.99));
         let principled = Principled::new(Rgb::splat(0.5), 0.0, 0.3, 1.5, 1.0, Rgb::ONE);
-        let layered = ShadingPoint::new(Bsdf::Principled(principled), n, n, wo);
+        let layered = ShadingPoint::new(Bsdf::Principled(principled), n, n, None, wo);
         assert!(layered.chooses_lobes());
         assert_ne!(directions(&layered, 0.01), directions(&layered, 0.99));
     }

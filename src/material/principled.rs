@@ -3,11 +3,14 @@
 //! dielectric specular layer over a Lambertian base.
 //!
 //! ```text
-//! f = k·F_c(v·h)·GGX_c·c_coat + (1 − k·A_coat(μo))·f_below            (coat weight k, IOR 1.5)
+//! f = f_sheen + (1 − max_rgb A_sheen(μo))·f_coated                     (sheen.rs)
+//! f_coated = k·F_c(v·h)·GGX_c·c_coat + (1 − k·A_coat(μo))·f_below     (coat weight k, IOR 1.5)
 //! f_below = m·F82(v·h)·GGX·c_metal + (1−m)·t·f_glass
 //!         + (1−m)·(1−t)·[ F_d(v·h)·GGX·c_spec + (1 − max_rgb A_spec(μo))·base/π ]
 //! f_glass = F(v·h, η)·GGX_reflect + (1 − F)·√base·GGX_refract (Walter et al. 2007), ·c_glass
-//! GGX     = D(h)·G2/(4·μo·μi), α = roughness²
+//! GGX     = D(h)·G2/(4·μo·μi), α = roughness², stretched along the tangent by Anisotropic
+//!           for the metal and the specular layer (not the glass or the coat, as Cycles); their
+//!           tables read the roughness (α_x·α_y)^¼
 //! F82     = Schlick from F0 = base with Cycles' 82° tint (specular colour, white by default)
 //! F_d     = mix(F0_d, 1, s(v·h)), s = (F_exact(v·h, η′) − F0(η′)) / (1 − F0(η′)),
 //!           F0_d = F0(η)·specularFactor·specularColor, η′ the IOR of F0(η)·specularFactor
@@ -29,6 +32,7 @@
 use super::BsdfSample;
 use super::fresnel::{self, F82Tint};
 use super::microfacet::Ggx;
+use super::sheen::{Sheen, SheenLobe};
 use super::tables;
 use crate::math::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
 use crate::math::{Rgb, Vec2, Vec3A};
@@ -148,23 +152,32 @@ pub struct Principled {
     base: Rgb,
     metallic: f32,
     roughness: f32,
+    /// The metal's and the specular layer's distribution (anisotropic along local x).
     ggx: Ggx,
+    /// The roughness their energy tables read: (α_x·α_y)^¼ after clamping, as Cycles.
+    table_roughness: f32,
+    /// The glass's distribution: isotropic of `roughness` whatever the anisotropy.
+    glass_ggx: Ggx,
     metal: F82Tint,
     specular: Option<Specular>,
     coat: Option<Coat>,
     glass: Option<Glass>,
+    sheen: Option<Sheen>,
 }
 
 /// What depends on the outgoing direction: the lobes' weights and the choice between them.
 #[derive(Clone, Copy, Debug)]
 struct View {
+    /// The sheen lobe from this direction, when there is one.
+    sheen: Option<SheenLobe>,
     coat: f32,
     metal: Rgb,
     specular: Rgb,
     glass: Rgb,
     diffuse: Rgb,
-    /// Probabilities of sampling the coat's GGX lobe, the base's (metal and specular share
-    /// one distribution) and the glass's; the rest goes to the diffuse lobe.
+    /// Probabilities of sampling the sheen, the coat's GGX lobe, the base's (metal and
+    /// specular share one distribution) and the glass's; the rest goes to the diffuse lobe.
+    p_sheen: f32,
     p_coat: f32,
     p_glossy: f32,
     p_glass: f32,
@@ -178,16 +191,36 @@ impl Principled {
     /// The model for base colour, metallic and roughness (in [0, 1]), IOR (> 1), specular
     /// factor (in [0, 1]) and specular colour (≥ 0).
     pub fn new(base: Rgb, metallic: f32, roughness: f32, ior: f32, specular: f32, specular_color: Rgb) -> Self {
+        let ggx = Ggx::from_roughness(roughness);
         Self {
             base,
             metallic,
             roughness,
-            ggx: Ggx::from_roughness(roughness),
+            ggx,
+            table_roughness: roughness,
+            glass_ggx: ggx,
             metal: F82Tint::new(base.min(Rgb::ONE), specular_color.min(Rgb::ONE)),
             specular: Specular::new(ior, specular, specular_color),
             coat: None,
             glass: None,
+            sheen: None,
         }
+    }
+
+    /// The same with its metal and specular layer stretched by Blender's `anisotropic` (in
+    /// [0, 1]) along the local x axis, the tangent.
+    pub fn with_anisotropy(self, anisotropic: f32) -> Self {
+        if !(anisotropic > 0.0) {
+            return self;
+        }
+        let ggx = Ggx::anisotropic(self.roughness, anisotropic);
+        Self { ggx, table_roughness: ggx.table_roughness(), ..self }
+    }
+
+    /// The same under a sheen of `color` (Sheen Weight × Sheen Tint, ≥ 0) and `roughness`.
+    pub fn with_sheen(self, color: Rgb, roughness: f32) -> Self {
+        let sheen = (color.max_element() > 0.0).then_some(Sheen { color, roughness });
+        Self { sheen, ..self }
     }
 
     /// The same with `transmission` (in [0, 1]) of its dielectric as glass, met at relative
@@ -220,8 +253,9 @@ impl Principled {
     }
 
     #[inline]
-    fn view(&self, mu: f32) -> View {
-        let (e, e_avg) = (tables::albedo(self.roughness, mu), tables::albedo_average(self.roughness));
+    fn view(&self, wo: Vec3A) -> View {
+        let mu = wo.z;
+        let (e, e_avg) = (tables::albedo(self.table_roughness, mu), tables::albedo_average(self.table_roughness));
         let (metal_gain, _) = compensation(e, e_avg, self.metal.average());
         let metal = metal_gain * self.metallic;
         let transmission = self.glass.map_or(0.0, |g| g.weight);
@@ -248,7 +282,7 @@ impl Principled {
         let (specular, layer_albedo) = match &self.specular {
             Some(s) => {
                 let (gain, kept) = compensation(e, e_avg, s.average);
-                let albedo = kept * s.f0.lerp(Rgb::ONE, tables::fresnel_weight(self.roughness, mu, s.z));
+                let albedo = kept * s.f0.lerp(Rgb::ONE, tables::fresnel_weight(self.table_roughness, mu, s.z));
                 (gain * dielectric, albedo.max_element().clamp(0.0, 1.0))
             }
             None => (Rgb::ZERO, 0.0),
@@ -266,16 +300,23 @@ impl Principled {
             }
             None => (0.0, 0.0, 1.0),
         };
+        // The sheen, on top of all, takes its albedo from everything under it likewise.
+        let sheen = self.sheen.and_then(|s| s.at(wo));
+        let top = sheen.map_or(1.0, |l| (1.0 - l.albedo()).clamp(0.0, 1.0));
+        let sheen_albedo = sheen.map_or(0.0, |l| mean(l.weight));
+        let (coat, coat_albedo, below) = (top * coat, top * coat_albedo, top * below);
         let (glossy, glass_albedo) = (below * glossy, below * glass_albedo);
         let diffuse_albedo = below * mean(diffuse) * std::f32::consts::PI;
-        let total = coat_albedo + glossy + glass_albedo + diffuse_albedo;
+        let total = sheen_albedo + coat_albedo + glossy + glass_albedo + diffuse_albedo;
         let p = |x: f32| if total > 0.0 { x / total } else { 0.0 };
         View {
+            sheen,
             coat,
             metal: metal * below,
             specular: specular * below,
             glass: glass * below,
             diffuse: diffuse * below,
+            p_sheen: p(sheen_albedo),
             p_coat: p(coat_albedo),
             p_glossy: p(glossy),
             p_glass: p(glass_albedo),
@@ -290,13 +331,15 @@ impl Principled {
                     let m = mirrored(wi);
                     let h = (wo + m).normalize();
                     let f = fresnel::dielectric(wo.dot(h), g.eta);
-                    let lobe = self.ggx.d(h) * self.ggx.g2(wo, m) / (4.0 * wo.z * m.z);
+                    let gg = &self.glass_ggx;
+                    let lobe = gg.d(h) * gg.g2(wo, m) / (4.0 * wo.z * m.z);
                     return g.tint * v.glass * ((1.0 - f) * lobe);
                 }
                 let Some((h, _, cos_o, cos_i)) = g.refraction(wo, wi) else { return Rgb::ZERO };
                 let f = fresnel::dielectric(cos_o, g.eta);
                 let denominator = cos_o + g.eta * cos_i;
-                let geometry = self.ggx.d(h) * self.ggx.g2(wo, wi) * g.eta * g.eta * cos_o * cos_i.abs()
+                let gg = &self.glass_ggx;
+                let geometry = gg.d(h) * gg.g2(wo, wi) * g.eta * g.eta * cos_o * cos_i.abs()
                     / (wo.z * wi.z.abs() * denominator * denominator);
                 g.tint * v.glass * ((1.0 - f) * geometry)
             });
@@ -305,9 +348,14 @@ impl Principled {
         let mu = wo.dot(h).max(0.0);
         let lobe = |g: &Ggx| g.d(h) * g.g2(wo, wi) / (4.0 * wo.z * wi.z);
         let specular = self.specular.map_or(Rgb::ZERO, |s| s.fresnel(mu) * v.specular);
-        let glass = self.glass.map_or(Rgb::ZERO, |g| v.glass * fresnel::dielectric(mu, g.eta));
+        let base_lobe = lobe(&self.ggx);
+        let glass = self.glass.map_or(Rgb::ZERO, |g| {
+            let glass_lobe = if self.ggx.is_isotropic() { base_lobe } else { lobe(&self.glass_ggx) };
+            v.glass * (fresnel::dielectric(mu, g.eta) * glass_lobe)
+        });
         let coat = self.coat.map_or(Rgb::ZERO, |c| c.layer.fresnel(mu) * (v.coat * lobe(&c.ggx)));
-        coat + (self.metal.eval(mu) * v.metal + specular + glass) * lobe(&self.ggx) + v.diffuse
+        let sheen = v.sheen.map_or(Rgb::ZERO, |l| l.eval(wi));
+        sheen + coat + (self.metal.eval(mu) * v.metal + specular) * base_lobe + glass + v.diffuse
     }
 
     #[inline]
@@ -317,20 +365,22 @@ impl Principled {
                 if g.thin {
                     let h = (wo + mirrored(wi)).normalize();
                     let f = fresnel::dielectric(wo.dot(h), g.eta);
-                    return v.p_glass * (1.0 - g.reflect_probability(f)) * self.ggx.reflection_pdf(wo, h);
+                    return v.p_glass * (1.0 - g.reflect_probability(f)) * self.glass_ggx.reflection_pdf(wo, h);
                 }
                 let Some((h, jacobian, cos_o, _)) = g.refraction(wo, wi) else { return 0.0 };
-                let visible = self.ggx.g1(wo) * cos_o * self.ggx.d(h) / wo.z;
+                let visible = self.glass_ggx.g1(wo) * cos_o * self.glass_ggx.d(h) / wo.z;
                 v.p_glass * (1.0 - g.reflect_probability(fresnel::dielectric(cos_o, g.eta))) * visible * jacobian
             });
         }
         let h = (wo + wi).normalize();
         let coat = self.coat.map_or(0.0, |c| v.p_coat * c.ggx.reflection_pdf(wo, h));
         let glass = self.glass.map_or(0.0, |g| {
-            v.p_glass * g.reflect_probability(fresnel::dielectric(wo.dot(h), g.eta)) * self.ggx.reflection_pdf(wo, h)
+            let f = fresnel::dielectric(wo.dot(h), g.eta);
+            v.p_glass * g.reflect_probability(f) * self.glass_ggx.reflection_pdf(wo, h)
         });
-        let diffuse = (1.0 - v.p_coat - v.p_glossy - v.p_glass).max(0.0);
-        coat + glass + v.p_glossy * self.ggx.reflection_pdf(wo, h) + diffuse * cosine_hemisphere_pdf(wi.z)
+        let sheen = v.sheen.map_or(0.0, |l| v.p_sheen * l.pdf(wi));
+        let diffuse = (1.0 - v.p_sheen - v.p_coat - v.p_glossy - v.p_glass).max(0.0);
+        sheen + coat + glass + v.p_glossy * self.ggx.reflection_pdf(wo, h) + diffuse * cosine_hemisphere_pdf(wi.z)
     }
 
     /// True when `wi` is on a side of the surface the model can send light to.
@@ -344,7 +394,7 @@ impl Principled {
     /// density from the same `wo`; each used to recompute them, with five table lookups).
     #[inline]
     pub fn at(&self, wo: Vec3A) -> PrincipledAt {
-        PrincipledAt { model: *self, wo, view: self.view(wo.z) }
+        PrincipledAt { model: *self, wo, view: self.view(wo) }
     }
 }
 
@@ -388,15 +438,19 @@ impl PrincipledAt {
             let h = g.sample_visible_normal(wo, u);
             2.0 * wo.dot(h) * h - wo
         };
-        let glass_from = v.p_coat + v.p_glossy;
-        let wi = match (u_lobe < v.p_coat, u_lobe < glass_from, u_lobe < glass_from + v.p_glass) {
-            (true, _, _) => reflect(&m.coat?.ggx),
-            (_, true, _) => reflect(&m.ggx),
-            (_, _, true) => {
+        let coat_from = v.p_sheen;
+        let glossy_from = coat_from + v.p_coat;
+        let glass_from = glossy_from + v.p_glossy;
+        let wi = match (u_lobe < coat_from, u_lobe < glossy_from, u_lobe < glass_from, u_lobe < glass_from + v.p_glass)
+        {
+            (true, ..) => v.sheen?.sample(u),
+            (_, true, ..) => reflect(&m.coat?.ggx),
+            (_, _, true, _) => reflect(&m.ggx),
+            (.., true) => {
                 // The rest of the lobe number decides between reflection and refraction.
                 // A direction on the wrong side for its lobe is dropped, as Cycles does.
                 let g = m.glass?;
-                let h = m.ggx.sample_visible_normal(wo, u);
+                let h = m.glass_ggx.sample_visible_normal(wo, u);
                 let f = fresnel::dielectric(wo.dot(h), g.eta);
                 let reflected = 2.0 * wo.dot(h) * h - wo;
                 if (u_lobe - glass_from) / v.p_glass < g.reflect_probability(f) {

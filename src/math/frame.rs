@@ -28,6 +28,16 @@ impl Frame {
         Self { s, t, n }
     }
 
+    /// A frame around the unit vector `n` whose first tangent is the unit vector `t`, taken
+    /// perpendicular to `n`.
+    #[inline]
+    pub fn from_normal_tangent(n: Vec3A, t: Vec3A) -> Self {
+        match (t - n * n.dot(t)).try_normalize() {
+            Some(s) => Self { s, t: n.cross(s), n },
+            None => Self::from_normal(n),
+        }
+    }
+
     /// World direction to local coordinates.
     #[inline]
     pub fn to_local(&self, v: Vec3A) -> Vec3A {

@@ -33,6 +33,18 @@ fn thin_glass() -> Bsdf {
     Bsdf::Principled(p.with_thin_transmission(1.0, 1.5))
 }
 
+/// `b` stretched by Blender's `anisotropic` along local x.
+fn anisotropic(b: Bsdf, anisotropic: f32) -> Bsdf {
+    let Bsdf::Principled(p) = b else { unreachable!("only Principled is anisotropic") };
+    Bsdf::Principled(p.with_anisotropy(anisotropic))
+}
+
+/// `b` under a sheen of `color` and `roughness`.
+fn sheen(b: Bsdf, color: Rgb, roughness: f32) -> Bsdf {
+    let Bsdf::Principled(p) = b else { unreachable!("only Principled takes a sheen") };
+    Bsdf::Principled(p.with_sheen(color, roughness))
+}
+
 /// `b` under a full coat of roughness `roughness`.
 fn coated(b: Bsdf, roughness: f32) -> Bsdf {
     let Bsdf::Principled(p) = b else { unreachable!("only Principled takes a coat") };
@@ -58,6 +70,28 @@ fn bsdfs() -> Vec<(&'static str, Bsdf)> {
         ("tinted glass r0.4 ior 1.45", glass(Rgb::new(0.6, 0.9, 0.7), 0.4, 1.45)),
         ("half glass, half plastic r0.4", half_glass()),
         ("thin tinted glass r0.3", thin_glass()),
+        (
+            "anisotropic metal r0.4 a0.8",
+            anisotropic(principled(Rgb::new(0.9, 0.9, 0.8), 1.0, 0.4, 1.5, 1.0, Rgb::ONE), 0.8),
+        ),
+        (
+            "anisotropic plastic r0.3 a0.5",
+            anisotropic(principled(Rgb::new(0.2, 0.3, 0.6), 0.0, 0.3, 1.5, 1.0, Rgb::ONE), 0.5),
+        ),
+        ("anisotropic glass r0.4 a1", anisotropic(half_glass(), 1.0)),
+        (
+            "sheen r0.5 over plastic",
+            sheen(principled(Rgb::new(0.6, 0.1, 0.1), 0.0, 0.5, 1.5, 1.0, Rgb::ONE), tint, 0.5),
+        ),
+        ("sheen r0.6 on black", sheen(principled(Rgb::ZERO, 0.0, 0.5, 1.5, 0.0, Rgb::ONE), Rgb::ONE, 0.6)),
+        (
+            "sheen r0.9 over coated anisotropic metal",
+            sheen(
+                coated(anisotropic(principled(Rgb::ONE, 1.0, 0.5, 1.5, 1.0, Rgb::ONE), 0.6), 0.2),
+                Rgb::splat(0.5),
+                0.9,
+            ),
+        ),
     ]
 }
 
@@ -68,8 +102,11 @@ fn cases() -> (Vec<(&'static str, Bsdf, Vec3A)>, f64) {
     (cases, alpha)
 }
 
+/// The outgoing direction at `cos_theta`, 30° round from the x axis (which anisotropic BSDFs
+/// stretch along: so their lobes are not mirror-symmetric about its plane).
 fn wo_at(cos_theta: f32) -> Vec3A {
-    Vec3A::new((1.0 - cos_theta * cos_theta).sqrt(), 0.0, cos_theta)
+    let r = (1.0 - cos_theta * cos_theta).sqrt();
+    Vec3A::new(r * 0.866_025_4, r * 0.5, cos_theta)
 }
 
 fn u2(i: u64, salt: u64) -> (f32, Vec2) {
@@ -172,6 +209,8 @@ fn a_white_metal_keeps_its_energy_and_nothing_gains_any() {
         coated(principled(Rgb::ONE, 1.0, 0.3, 1.5, 1.0, Rgb::ONE), 0.5),
         glass(Rgb::ONE, 0.3, 1.5),
         glass(Rgb::ONE, 0.7, 1.0 / 1.5),
+        sheen(principled(Rgb::ONE, 0.0, 0.5, 1.5, 1.0, Rgb::ONE), Rgb::ONE, 0.5),
+        anisotropic(principled(Rgb::ONE, 1.0, 0.3, 1.5, 1.0, Rgb::ONE), 1.0),
     ];
     for b in whites {
         for (cos_o, slack) in [(1.0f32, 0.0), (0.7, 0.0), (0.3, 0.0), (0.05, 0.035)] {

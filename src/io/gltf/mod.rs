@@ -41,8 +41,10 @@ use crate::scene::description::{CameraDesc, CameraPlacement, InstanceDesc, Light
 
 /// Extensions myriad reads, with what it does with each (`info` lists them). Others are
 /// named in one warning, and refused where the file requires them.
-pub const SUPPORTED: [(&str, &str); 14] = [
+pub const SUPPORTED: [(&str, &str); 16] = [
     ("KHR_materials_clearcoat", "the Principled coat"),
+    ("KHR_materials_sheen", "the Principled sheen, as Cycles renders it"),
+    ("KHR_materials_anisotropy", "anisotropic metal and specular, as Cycles after Blender's import"),
     ("KHR_materials_transmission", "glass and other transmission"),
     ("KHR_materials_volume", "absorption inside transmissive solids"),
     ("KHR_materials_emissive_strength", "emission above 1"),
@@ -401,6 +403,58 @@ impl Loader<'_> {
         })
     }
 
+    /// A texture an extension's JSON refers to (`{"index": …, "texCoord": …}`); an index
+    /// out of range is warned about and read as no texture.
+    fn json_texture(
+        &mut self,
+        doc: &gltf::Document,
+        info: Option<&gltf::json::Value>,
+        images: &ImageMap,
+        what: &str,
+    ) -> Option<TextureRef> {
+        let info = info?;
+        let index = info.get("index").and_then(|i| i.as_u64());
+        let Some(tex) = index.and_then(|i| doc.textures().nth(i as usize)) else {
+            self.warn(format!("{what} names texture {index:?}, which does not exist: read without it"));
+            return None;
+        };
+        let tex_coord = info.get("texCoord").and_then(|c| c.as_u64()).unwrap_or(0) as u32;
+        let transform = info.get("extensions").and_then(|e| e.get("KHR_texture_transform")).map(khr_transform_json);
+        self.texture(tex, tex_coord, transform, images)
+    }
+
+    /// KHR_materials_sheen's colour, roughness and their textures, on `material`.
+    fn sheen(&mut self, doc: &gltf::Document, m: &gltf::Material, material: Material, images: &ImageMap) -> Material {
+        let Some(ext) = m.extension_value("KHR_materials_sheen") else { return material };
+        let what = format!("material '{}': KHR_materials_sheen", material.name);
+        let color = number_array::<3>(ext.get("sheenColorFactor")).map_or(Rgb::ZERO, Rgb::from);
+        Material {
+            sheen_color: color,
+            sheen_roughness: number(ext.get("sheenRoughnessFactor")).unwrap_or(0.0),
+            sheen_color_texture: self.json_texture(doc, ext.get("sheenColorTexture"), images, &what),
+            sheen_roughness_texture: self.json_texture(doc, ext.get("sheenRoughnessTexture"), images, &what),
+            ..material
+        }
+    }
+
+    /// KHR_materials_anisotropy's strength, rotation and texture, on `material`.
+    fn anisotropy(
+        &mut self,
+        doc: &gltf::Document,
+        m: &gltf::Material,
+        material: Material,
+        images: &ImageMap,
+    ) -> Material {
+        let Some(ext) = m.extension_value("KHR_materials_anisotropy") else { return material };
+        let what = format!("material '{}': KHR_materials_anisotropy", material.name);
+        Material {
+            anisotropy: number(ext.get("anisotropyStrength")).unwrap_or(0.0),
+            anisotropy_rotation: number(ext.get("anisotropyRotation")).unwrap_or(0.0),
+            anisotropy_texture: self.json_texture(doc, ext.get("anisotropyTexture"), images, &what),
+            ..material
+        }
+    }
+
     fn info(&mut self, info: Option<gltf::texture::Info>, images: &ImageMap) -> Option<TextureRef> {
         let info = info?;
         let tt = info.texture_transform();
@@ -456,13 +510,12 @@ impl Loader<'_> {
                 self.texture(n.texture(), n.tex_coord(), transform, images).map(|t| (t, scale))
             });
             let clearcoat = m.extension_value("KHR_materials_clearcoat").map_or((0.0, 0.0), |c| {
-                let factor = |k: &str| c.get(k).and_then(|v| v.as_f64()).map(|v| v as f32);
                 // Blender's importer gives a coat without a roughness 0.03, not glTF's 0.
                 let default_roughness = if self.blender { 0.03 } else { 0.0 };
                 let textured = c.get("clearcoatRoughnessTexture").is_some();
                 let roughness =
-                    factor("clearcoatRoughnessFactor").unwrap_or(if textured { 0.0 } else { default_roughness });
-                (factor("clearcoatFactor").unwrap_or(0.0), roughness)
+                    number(c.get("clearcoatRoughnessFactor")).unwrap_or(if textured { 0.0 } else { default_roughness });
+                (number(c.get("clearcoatFactor")).unwrap_or(0.0), roughness)
             });
             let volume = self.volume(&m, &name);
             let alpha = match m.alpha_mode() {
@@ -492,6 +545,8 @@ impl Loader<'_> {
                 ignored: ignored_properties(&m),
                 ..Material::diffuse(&name, Rgb::new(bc[0], bc[1], bc[2]))
             };
+            let material = self.sheen(doc, &m, material, images);
+            let material = self.anisotropy(doc, &m, material, images);
             self.desc.materials.push(material);
         }
         // glTF's default material, for primitives without one: white, metallic 1, roughness 1.
@@ -719,10 +774,8 @@ impl Loader<'_> {
 }
 
 /// Material extensions myriad does not render (when a material has them, `info` lists them).
-const UNRENDERED_EXTENSIONS: [&str; 8] = [
-    "KHR_materials_sheen",
+const UNRENDERED_EXTENSIONS: [&str; 6] = [
     "KHR_materials_iridescence",
-    "KHR_materials_anisotropy",
     "KHR_materials_dispersion",
     "KHR_materials_diffuse_transmission",
     "KHR_materials_pbrSpecularGlossiness",
@@ -762,6 +815,22 @@ fn ignored_properties(m: &gltf::Material) -> Vec<String> {
         ignored.push("occlusionTexture (no effect in a path tracer)".into());
     }
     ignored
+}
+
+/// A number of extension JSON, if it is one.
+fn number(v: Option<&gltf::json::Value>) -> Option<f32> {
+    v.and_then(|v| v.as_f64()).map(|v| v as f32)
+}
+
+/// `N` numbers of extension JSON, if it is an array of them.
+fn number_array<const N: usize>(v: Option<&gltf::json::Value>) -> Option<[f32; N]> {
+    let a = v?.as_array()?;
+    (a.len() == N).then_some(())?;
+    let mut out = [0.0; N];
+    for (o, x) in out.iter_mut().zip(a) {
+        *o = x.as_f64()? as f32;
+    }
+    Some(out)
 }
 
 /// KHR_texture_transform from raw extension JSON (for normal textures).

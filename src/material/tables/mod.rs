@@ -5,6 +5,9 @@
 //! 1/η) over r, μ and z; and the average Fresnel weight s(r, μ, z) of a dielectric, for the
 //! albedo a specular layer takes from what lies under it.
 //!
+//! Cycles' sheen lobe is not an integral of ours: `sheen.rs` holds it as measured on Cycles
+//! (`tools/measure_sheen.py`), read by [`sheen`].
+//!
 //! Owns: the integrands ([`ggx_albedo`], [`ggx_albedo_average`], [`fresnel_weight_average`]),
 //! the grids (Cycles' layout: node i of n at i/(n−1), roughness fastest, the lowest node moved
 //! to 1e-4 and z's highest to 0.99) and multilinear lookups. The numbers live in `data.rs`,
@@ -13,6 +16,7 @@
 //! nodes and compares.
 
 mod data;
+mod sheen;
 
 use rayon::prelude::*;
 
@@ -199,6 +203,18 @@ pub fn albedo(rough: f32, mu: f32) -> f32 {
 pub fn albedo_average(rough: f32) -> f32 {
     let (i, f) = position(rough, E_NODES);
     data::GGX_E_AVG[i] + (data::GGX_E_AVG[i + 1] - data::GGX_E_AVG[i]) * f
+}
+
+/// Cycles' sheen lobe at perceptual `rough`ness and cos θo = `mu` (bilinear in the measured
+/// table, `sheen.rs`): the linearly transformed cosine's a and b, and the lobe's albedo.
+#[inline]
+pub fn sheen(rough: f32, mu: f32) -> [f32; 3] {
+    let n = sheen::NODES;
+    let ((i, fx), (j, fy)) = (position(mu, n), position(rough, n));
+    let at = |a: usize, b: usize| Vec3A::from(sheen::SHEEN[b * n + a]);
+    let lo = at(i, j).lerp(at(i + 1, j), fx);
+    let hi = at(i, j + 1).lerp(at(i + 1, j + 1), fx);
+    lo.lerp(hi, fy).to_array()
 }
 
 /// Trilinear lookup in a table of `n³` (x fastest).

@@ -4,7 +4,7 @@
 
 use super::validate::placeable;
 use crate::error::{Error, Result};
-use crate::geometry::{Attributes, GeometryBuilder, NO_LIGHT};
+use crate::geometry::{Attributes, GeometryBuilder, NO_LIGHT, radial_tangents};
 use crate::light::{AreaEmission, Light, QuadLight, TriangleLight};
 use crate::limits::{MAX_COORDINATE, MAX_POWER};
 use crate::material::{Image, Material};
@@ -112,19 +112,29 @@ impl<'a> Placer<'a> {
         ))
     }
 
-    /// Pushes a mesh's vertex attributes (object space, or transformed by `m`).
+    /// Pushes a mesh's vertex attributes (object space, or transformed by `m`), with the
+    /// radial tangents its material asks for.
     fn attributes(&mut self, mesh: &MeshDesc, m: Option<Mat4>) -> Option<Attributes> {
-        if mesh.normals.is_none() && mesh.uvs.is_none() {
+        let radial = self.desc.materials[mesh.material as usize].needs_radial_tangents();
+        if mesh.normals.is_none() && mesh.uvs.is_none() && !radial {
             return None;
         }
-        let normals: Option<Vec<Vec3A>> = mesh.normals.as_ref().map(|ns| match m {
-            Some(m) => {
-                let nm = Mat3::from_mat4(m).inverse().transpose();
-                ns.iter().map(|&n| (nm * n).normalize_or_zero()).collect()
-            }
+        let nm = m.map(|m| Mat3::from_mat4(m).inverse().transpose());
+        let normals: Option<Vec<Vec3A>> = mesh.normals.as_ref().map(|ns| match nm {
+            Some(nm) => ns.iter().map(|&n| (nm * n).normalize_or_zero()).collect(),
             None => ns.clone(),
         });
-        let base = self.geo.push_vertices(normals.as_deref(), mesh.uvs.as_deref(), mesh.positions.len());
+        // Transformed as normals are, as Cycles' tangent node does.
+        let tangents = radial.then(|| {
+            let ts = radial_tangents(&mesh.positions);
+            match nm {
+                Some(nm) => ts.into_iter().map(|t| nm * t).collect(),
+                None => ts,
+            }
+        });
+        let count = mesh.positions.len();
+        let base =
+            self.geo.push_vertices_with_tangents(normals.as_deref(), mesh.uvs.as_deref(), tangents.as_deref(), count);
         Some(Attributes { base, smooth: mesh.normals.is_some(), has_uv: mesh.uvs.is_some() })
     }
 

@@ -63,11 +63,24 @@ fn validate_material(file: &str, m: &Material, images: usize) -> Result<()> {
     check_color(file, &what, "absorption", m.absorption, None)?;
     check_unit(file, &what, "coat roughness", m.coat_roughness)?;
     check_color(file, &what, "specular colour", m.specular_color, None)?;
+    check_color(file, &what, "sheen colour", m.sheen_color, None)?;
+    check_unit(file, &what, "sheen roughness", m.sheen_roughness)?;
+    check_unit(file, &what, "anisotropy", m.anisotropy)?;
+    if !m.anisotropy_rotation.is_finite() {
+        return Err(Error::scene(file, what, format!("anisotropy rotation {} is not finite", m.anisotropy_rotation)));
+    }
     if !(m.ior > 1.0 && m.ior.is_finite()) {
         return Err(Error::scene(file, what, format!("IOR must be a finite number above 1, not {}", m.ior)));
     }
-    let textures =
-        [&m.base_color_texture, &m.metallic_roughness_texture, &m.emission_texture, &m.normal_texture.map(|n| n.0)];
+    let textures = [
+        &m.base_color_texture,
+        &m.metallic_roughness_texture,
+        &m.emission_texture,
+        &m.normal_texture.map(|n| n.0),
+        &m.sheen_color_texture,
+        &m.sheen_roughness_texture,
+        &m.anisotropy_texture,
+    ];
     if let Some(t) = textures.into_iter().flatten().find(|t| t.image as usize >= images) {
         return Err(Error::scene(file, what, format!("texture uses image {}, but there are {images} images", t.image)));
     }
