@@ -223,7 +223,7 @@ def write_rust(table, errors, path):
     ninety = errors[int(0.9 * len(errors))][0]
     rows = []
     for j in range(NODES):
-        cells = ", ".join(f"[{a:.6e}, {b:.6e}, {al:.6e}]" for a, b, al in table[j])
+        cells = ", ".join("[" + ", ".join(str(np.float32(x)) for x in node) + "]" for node in table[j])
         rows.append(f"    // roughness {j}/{NODES - 1}\n    {cells},")
     body = "\n".join(rows)
     text = f"""//! Cycles' sheen lobe as measured by `tools/measure_sheen.py` (do not edit: rerun it).

@@ -51,14 +51,14 @@ impl Sheen {
 impl SheenLobe {
     /// `w` in the lobe's frame (x along the viewer's azimuth).
     #[inline]
-    fn to_lobe(&self, w: Vec3A) -> Vec3A {
+    fn in_lobe_frame(self, w: Vec3A) -> Vec3A {
         let (c, s) = (self.azimuth.x, self.azimuth.y);
         Vec3A::new(c * w.x + s * w.y, c * w.y - s * w.x, w.z)
     }
 
     /// `w` from the lobe's frame back to the local frame.
     #[inline]
-    fn from_lobe(&self, w: Vec3A) -> Vec3A {
+    fn in_local_frame(self, w: Vec3A) -> Vec3A {
         let (c, s) = (self.azimuth.x, self.azimuth.y);
         Vec3A::new(c * w.x - s * w.y, s * w.x + c * w.y, w.z)
     }
@@ -78,7 +78,7 @@ impl SheenLobe {
         if wi.z <= 0.0 {
             return 0.0;
         }
-        wi.z * self.shape(self.to_lobe(wi))
+        wi.z * self.shape(self.in_lobe_frame(wi))
     }
 
     /// The lobe's value (without the cosine) towards `wi`.
@@ -87,14 +87,14 @@ impl SheenLobe {
         if wi.z <= 0.0 {
             return Rgb::ZERO;
         }
-        self.weight * self.shape(self.to_lobe(wi))
+        self.weight * self.shape(self.in_lobe_frame(wi))
     }
 
     /// A direction drawn with density [`SheenLobe::pdf`].
     #[inline]
     pub fn sample(&self, u: Vec2) -> Vec3A {
         let c = square_to_cosine_hemisphere(u);
-        self.from_lobe(Vec3A::new(c.x - c.z * self.b, c.y, c.z * self.a).normalize())
+        self.in_local_frame(Vec3A::new(c.x - c.z * self.b, c.y, c.z * self.a).normalize())
     }
 
     /// Its albedo as one number for layering: the largest channel of `weight`.
