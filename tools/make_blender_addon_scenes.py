@@ -193,6 +193,15 @@ def build(name, folder):
                                                        Transmission_Weight=1.0), name="glass")
         light("AREA", (0, -1.5, 2.5), (math.radians(40), 0, 0), energy=300.0, size=1.5, size_y=0.6, shape="RECTANGLE")
         return "metal, plastic with specular tint, coat, rough glass: Principled BSDFs under an area light"
+    if name == "sheen_anisotropic":
+        scene, grey = stage()
+        add_sphere((-0.6, 0, 0.5), 0.5, principled("velvet", Base_Color=(0.3, 0.1, 0.2), Roughness=0.6,
+                                                    Sheen_Weight=1.0, Sheen_Roughness=0.5,
+                                                    Sheen_Tint=(1.0, 0.6, 0.8)))
+        add_sphere((0.6, 0, 0.5), 0.5, principled("brushed", Base_Color=(0.9, 0.85, 0.8), Metallic=1.0, Roughness=0.4,
+                                                   Anisotropic=0.6, Anisotropic_Rotation=0.15), name="brushed")
+        light("AREA", (0, -1.5, 2.5), (math.radians(40), 0, 0), energy=300.0, size=1.5, size_y=0.6, shape="RECTANGLE")
+        return "a sheen (velvet) and an anisotropic brushed metal under an area light"
     if name == "camera":
         scene, grey = stage()
         grey_sphere(grey)
@@ -211,7 +220,7 @@ def build(name, folder):
 
 SCENES = [
     "area_square", "area_rectangle", "area_disk", "area_ellipse", "point_soft", "point_sphere", "spot_radius",
-    "sun_angle", "world_color", "world_hdri", "emissive_mesh", "principled", "camera",
+    "sun_angle", "world_color", "world_hdri", "emissive_mesh", "principled", "sheen_anisotropic", "camera",
 ]  # fmt: skip
 
 

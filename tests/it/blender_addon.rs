@@ -71,7 +71,7 @@ fn f12_renders_what_cycles_renders_and_bad_input_is_reported() {
         serde_json::from_str(&std::fs::read_to_string(out.path().join("summary.json")).unwrap()).unwrap();
 
     let rendered = summary["scenes"].as_object().unwrap();
-    assert!(rendered.len() >= 13, "{rendered:?}");
+    assert!(rendered.len() >= 14, "{rendered:?}");
     for (name, r) in rendered {
         assert!(r["error"].is_null(), "{name}: {}", r["error"]);
         let keep = Path::new(r["keep"].as_str().unwrap());

@@ -409,7 +409,19 @@ fn principled_materials_agree_with_cycles_pixel_by_pixel() {
 fn one_factor_blender_scenes_agree_with_cycles_pixel_by_pixel() {
     // tests/data/blender/factors: one material (or the spot) on a sphere, each against its
     // Cycles render (tools/make_blender_factors.py makes both).
-    for name in ["metal", "plastic", "specular", "coat", "glass_smooth", "glass_rough", "alpha_blend", "spot"] {
+    let names = [
+        "metal",
+        "plastic",
+        "specular",
+        "coat",
+        "sheen",
+        "anisotropic",
+        "glass_smooth",
+        "glass_rough",
+        "alpha_blend",
+        "spot",
+    ];
+    for name in names {
         let (glb, reference) =
             (blender(&format!("factors/{name}.glb")), blender(&format!("factors/{name}.cycles.exr")));
         agrees_with_cycles_pixel_by_pixel(&glb, &reference, 256);

@@ -22,8 +22,6 @@ from .images import linear_to_srgb8, png_bytes
 # Principled inputs whose effect myriad does not render yet: (socket, default, what).
 UNRENDERED_INPUTS = [
     ("Subsurface Weight", 0.0, "subsurface scattering"),
-    ("Sheen Weight", 0.0, "sheen"),
-    ("Anisotropic", 0.0, "anisotropy"),
     ("Diffuse Roughness", 0.0, "diffuse roughness"),
     ("Thin Film Thickness", 0.0, "thin film"),
 ]
@@ -250,6 +248,8 @@ class MaterialConverter:
                 self.warn(f"{self._where(material, node, 'Coat IOR')}: myriad's coat has IOR 1.5")
             if any(abs(c - 1.0) > 1e-6 for c in v("Coat Tint", (1.0, 1.0, 1.0, 1.0))[:3]):
                 self.warn(f"{self._where(material, node, 'Coat Tint')}: a tinted coat renders untinted")
+        self._sheen(material, node, ext)
+        self._anisotropy(material, node, ext)
         for name, default, what in UNRENDERED_INPUTS:
             value = v(name, default)
             if isinstance(value, float) and value > default + 1e-6:
@@ -259,6 +259,31 @@ class MaterialConverter:
         if ext:
             gltf["extensions"] = ext
         return gltf
+
+    def _sheen(self, material, node, ext):
+        """Sheen Weight × Sheen Tint and Sheen Roughness, as KHR_materials_sheen."""
+        v = lambda name, default: self.value(material, node, name, default)  # noqa: E731
+        weight = float(v("Sheen Weight", 0.0))
+        if weight <= 0.0:
+            return
+        tint = [float(c) for c in v("Sheen Tint", (1.0, 1.0, 1.0, 1.0))[:3]]
+        ext["KHR_materials_sheen"] = {
+            "sheenColorFactor": [weight * c for c in tint],
+            "sheenRoughnessFactor": float(v("Sheen Roughness", 0.5)),
+        }
+
+    def _anisotropy(self, material, node, ext):
+        """Anisotropic and its rotation, as KHR_materials_anisotropy: myriad stretches along
+        Blender's default tangent (radial about the object's Z), which a linked Tangent
+        replaces."""
+        v = lambda name, default: self.value(material, node, name, default)  # noqa: E731
+        strength = float(v("Anisotropic", 0.0))
+        if strength <= 0.0:
+            return
+        rotation = float(v("Anisotropic Rotation", 0.0)) * 2.0 * np.pi
+        ext["KHR_materials_anisotropy"] = {"anisotropyStrength": strength, "anisotropyRotation": rotation}
+        if node.inputs.get("Tangent") is not None and node.inputs["Tangent"].is_linked:
+            self.warn(f"{self._where(material, node, 'Tangent')}: myriad stretches along the default (radial) tangent")
 
     def emission(self, material, node):
         """An Emission shader: a black surface that emits colour × strength."""
