@@ -157,6 +157,72 @@ fn a_texture_takes_its_image_from_an_extension_or_its_fallback() {
 }
 
 #[test]
+fn sheen_and_anisotropy_read_with_their_textures_and_a_missing_texture_is_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = data_uri("image/png", &two_texels(image::ImageFormat::Png));
+    let mut doc = textured(json!([{"uri": png}]), json!({"source": 0}));
+    doc["extensionsUsed"] = json!(["KHR_materials_sheen", "KHR_materials_anisotropy"]);
+    doc["materials"][0]["extensions"] = json!({
+        "KHR_materials_sheen": {
+            "sheenColorFactor": [0.9, 0.5, 0.25], "sheenRoughnessFactor": 0.4,
+            "sheenColorTexture": {"index": 0}, "sheenRoughnessTexture": {"index": 0}
+        },
+        "KHR_materials_anisotropy": {"anisotropyStrength": 0.7, "anisotropyRotation": 1.25, "anisotropyTexture": {"index": 0}}
+    });
+    doc["materials"][1]["extensions"] = json!({
+        "KHR_materials_sheen": {"sheenColorFactor": [1.0, 1.0, 1.0], "sheenColorTexture": {"index": 7}},
+        "KHR_materials_anisotropy": {"anisotropyStrength": 0.3}
+    });
+    let d = load(&write(dir.path(), "sheen.gltf", &doc));
+    let m = &d.materials[0];
+    assert_eq!((m.sheen_color.to_array(), m.sheen_roughness), ([0.9, 0.5, 0.25], 0.4));
+    assert_eq!((m.anisotropy, m.anisotropy_rotation), (0.7, 1.25));
+    assert!(m.sheen_color_texture.is_some() && m.sheen_roughness_texture.is_some() && m.anisotropy_texture.is_some());
+    assert!(!m.needs_radial_tangents() && m.ignored.is_empty(), "{:?}", m.ignored);
+    // Defaults: roughness 0, rotation 0; without a direction texture, Blender's radial tangent.
+    let m = &d.materials[1];
+    assert_eq!((m.sheen_roughness, m.anisotropy, m.anisotropy_rotation), (0.0, 0.3, 0.0));
+    assert!(m.sheen_color_texture.is_none() && m.needs_radial_tangents());
+    assert!(
+        d.warnings.iter().any(|w| w.contains("KHR_materials_sheen") && w.contains("texture Some(7)")),
+        "{:?}",
+        d.warnings
+    );
+    // And the scene renders (its meshes carry the radial tangents the second material asks for).
+    let out =
+        crate::split::ok(&["render", "sheen.gltf", "--spp", "2", "--resolution", "16x12", "-o", "s.exr"], dir.path());
+    assert!(out.contains("s.exr"), "{out}");
+}
+
+#[test]
+fn a_plain_data_uri_is_read_and_an_accessor_of_no_defined_type_is_an_error_only_where_read() {
+    let dir = tempfile::tempdir().unwrap();
+    // The quantised triangle's positions as a percent-encoded (not base64) data URI.
+    let mut b = Vec::new();
+    for v in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+        v.iter().for_each(|c| b.extend(c.to_le_bytes()));
+    }
+    let views = json!([{"buffer": 0, "byteLength": 36}]);
+    let accessors = json!([
+        {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+        {"componentType": 5126, "count": 3, "type": "NotaVEC3"}
+    ]);
+    let mut doc = document(&b, views, accessors, json!({"POSITION": 0}));
+    let encoded: String = b.iter().map(|byte| format!("%{byte:02X}")).collect();
+    doc["buffers"][0]["uri"] = json!(format!("data:application/gltf-buffer,{encoded}"));
+    let d = load(&write(dir.path(), "plain.gltf", &doc));
+    assert_eq!(d.meshes[0].positions[1], Vec3A::new(1.0, 0.0, 0.0));
+    // The undefined type is read by nothing above; read as normals, it is an error naming it.
+    doc["meshes"][0]["primitives"][0]["attributes"]["NORMAL"] = json!(1);
+    let e = load_error(dir.path(), "typed.gltf", doc.to_string().as_bytes());
+    assert_mentions(&e, &["accessor 1", "'NotaVEC3'", "does not define"]);
+    // A buffer without data (no uri, not a GLB) is named where a mesh reads it.
+    doc["buffers"][0].as_object_mut().unwrap().remove("uri");
+    let e = load_error(dir.path(), "dataless.gltf", doc.to_string().as_bytes());
+    assert_mentions(&e, &["reads buffer 0, which holds no data"]);
+}
+
+#[test]
 fn required_extensions_myriad_cannot_read_are_refused_and_used_ones_named() {
     let dir = tempfile::tempdir().unwrap();
     let mut doc = crate::common::cornell_json();

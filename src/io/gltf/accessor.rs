@@ -26,13 +26,21 @@ impl<'a> Views<'a> {
         Self { buffers, decoded }
     }
 
-    /// The bytes of `view` (empty where they lie outside its buffer).
-    pub fn bytes(&self, view: &gltf::buffer::View) -> &[u8] {
+    /// The bytes of `view` (empty where they lie outside its buffer), or why there are none:
+    /// its buffer holds no data at all.
+    pub fn bytes(&self, view: &gltf::buffer::View) -> Result<&[u8], String> {
         if let Some(d) = self.decoded.get(&view.index()) {
-            return d;
+            return Ok(d);
         }
-        let buffer = self.buffers.get(view.buffer().index()).map_or(&[][..], |b| &b.0[..]);
-        buffer.get(view.offset()..view.offset().saturating_add(view.length())).unwrap_or(&[])
+        let index = view.buffer().index();
+        let buffer = self.buffers.get(index).map_or(&[][..], |b| &b.0[..]);
+        if buffer.is_empty() && view.length() > 0 {
+            return Err(format!(
+                "reads buffer {index}, which holds no data: it has no uri and the file is no GLB with a binary \
+                 chunk, or its uri is one myriad does not fetch (http:)"
+            ));
+        }
+        Ok(buffer.get(view.offset()..view.offset().saturating_add(view.length())).unwrap_or(&[]))
     }
 }
 
@@ -73,7 +81,7 @@ fn read_dense(
     e: Element,
     out: &mut [f32],
 ) -> Result<(), String> {
-    let bytes = views.bytes(view);
+    let bytes = views.bytes(view)?;
     let size = e.ty.size();
     let stride = view.stride().unwrap_or(e.n * size);
     for (i, element) in out.chunks_exact_mut(e.n).enumerate() {
@@ -131,13 +139,13 @@ pub fn indices(views: &Views, acc: &gltf::Accessor) -> Result<Vec<u32>, String> 
         Ok(())
     };
     if let Some(view) = acc.view() {
-        read(views.bytes(&view), view.stride().unwrap_or(ty.size()), acc.offset(), &mut out)?;
+        read(views.bytes(&view)?, view.stride().unwrap_or(ty.size()), acc.offset(), &mut out)?;
     }
     if let Some(sparse) = acc.sparse() {
         let at = sparse_indices(views, &sparse, count)?;
         let v = sparse.values();
         let mut values = vec![0u32; at.len()];
-        read(views.bytes(&v.view()), ty.size(), v.offset(), &mut values).map_err(|e| format!("sparse values: {e}"))?;
+        read(views.bytes(&v.view())?, ty.size(), v.offset(), &mut values).map_err(|e| format!("sparse values: {e}"))?;
         for (&i, &x) in at.iter().zip(&values) {
             out[i] = x;
         }
@@ -163,7 +171,7 @@ fn sparse_indices(views: &Views, sparse: &gltf::accessor::sparse::Sparse, count:
         IndexType::U16 => DataType::U16,
         IndexType::U32 => DataType::U32,
     };
-    let bytes = views.bytes(&idx.view());
+    let bytes = views.bytes(&idx.view())?;
     (0..sparse.count())
         .map(|k| {
             let i = unsigned_int(bytes, ty, idx.offset() + k * ty.size())

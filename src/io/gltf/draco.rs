@@ -34,7 +34,7 @@ pub fn decode(doc: &gltf::Document, views: &Views, ext: &Value) -> Result<Decode
         .ok_or("its Draco extension names no buffer view that exists")?;
     let attribute = |name: &str| ext.get("attributes").and_then(|a| a.get(name)).and_then(Value::as_u64);
     let limits = DecodeLimits::default().with_max_decoded_bytes(crate::limits::memory_limit().bytes);
-    let mut buffer = DecoderBuffer::new(views.bytes(&view)).with_limits(limits);
+    let mut buffer = DecoderBuffer::new(views.bytes(&view)?).with_limits(limits);
     let mut mesh = Mesh::new();
     MeshDecoder::new()
         .decode(&mut buffer, &mut mesh)

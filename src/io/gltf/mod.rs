@@ -194,22 +194,39 @@ fn import_buffers(
             if bin && (meshopt::fallback_buffer(&buffer) || blob.is_none()) {
                 return Ok(gltf::buffer::Data(Vec::new()));
             }
+            if let gltf::buffer::Source::Uri(uri) = buffer.source()
+                && let Some(bytes) = plain_data_uri(uri)
+            {
+                return check_length(&buffer, gltf::buffer::Data(bytes));
+            }
             let data = match gltf::buffer::Data::from_source_and_blob(buffer.source(), base, &mut blob) {
                 // An `http:` (or other) URI myriad does not fetch: no data, an error only
                 // where an accessor reads it (the glTF-Validator calls such files valid).
                 Err(gltf::Error::UnsupportedScheme) => return Ok(gltf::buffer::Data(Vec::new())),
                 other => other?,
             };
-            if data.len() < buffer.length() {
-                return Err(gltf::Error::BufferLength {
-                    buffer: buffer.index(),
-                    expected: buffer.length(),
-                    actual: data.len(),
-                });
-            }
-            Ok(data)
+            check_length(&buffer, data)
         })
         .collect()
+}
+
+/// `data` unless it is shorter than `buffer` says.
+fn check_length(buffer: &gltf::Buffer, data: gltf::buffer::Data) -> gltf::Result<gltf::buffer::Data> {
+    if data.len() < buffer.length() {
+        return Err(gltf::Error::BufferLength {
+            buffer: buffer.index(),
+            expected: buffer.length(),
+            actual: data.len(),
+        });
+    }
+    Ok(data)
+}
+
+/// The bytes of a data URI that is not base64 (RFC 2397: the payload percent-encoded), which
+/// the crate would decode as base64; `None` for other URIs.
+fn plain_data_uri(uri: &str) -> Option<Vec<u8>> {
+    let (header, payload) = uri.strip_prefix("data:")?.split_once(',')?;
+    (!header.ends_with(";base64")).then(|| urlencoding::decode_binary(payload.as_bytes()).into_owned())
 }
 
 fn buffer_error(file: &str, e: gltf::Error) -> Error {
@@ -360,7 +377,7 @@ impl Loader<'_> {
     /// The encoded bytes of `img`: its buffer view's, or its URI's (a data URI or a file).
     fn image_bytes(&self, img: &gltf::Image, base: Option<&Path>) -> std::result::Result<Vec<u8>, String> {
         match img.source() {
-            gltf::image::Source::View { view, .. } => Ok(self.views.bytes(&view).to_vec()),
+            gltf::image::Source::View { view, .. } => self.views.bytes(&view).map(<[u8]>::to_vec),
             gltf::image::Source::Uri { uri, .. } => {
                 gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), base)
                     .map(|d| d.0)
@@ -560,7 +577,19 @@ impl Loader<'_> {
     /// Reads accessor `acc` of a primitive as `D` floats an element, of the component types
     /// `types` (f32, and the integers `KHR_mesh_quantization` allows there).
     fn floats<const D: usize>(&self, where_: &str, acc: &gltf::Accessor, types: &[DataType]) -> Result<Vec<[f32; D]>> {
+        self.defined(where_, acc)?;
         accessor::floats(self.views, acc, types).map_err(|m| self.err(format!("{where_}, accessor {}", acc.index()), m))
+    }
+
+    /// An error unless `acc` has a type glTF defines (see `tolerate.rs`).
+    fn defined(&self, where_: &str, acc: &gltf::Accessor) -> Result<()> {
+        match self.tolerated.unknown_accessors.get(&acc.index()) {
+            Some(ty) => Err(self.err(
+                format!("{where_}, accessor {}", acc.index()),
+                format!("has type '{ty}', which glTF does not define (SCALAR, VEC2 to VEC4 or MAT2 to MAT4)"),
+            )),
+            None => Ok(()),
+        }
     }
 
     /// One mesh per triangle primitive; returns (glTF mesh, primitive) → mesh index.
@@ -662,6 +691,7 @@ impl Loader<'_> {
         let indices = prim
             .indices()
             .map(|a| {
+                self.defined(where_, &a)?;
                 accessor::indices(self.views, &a).map_err(|m| self.err(format!("{where_}, accessor {}", a.index()), m))
             })
             .transpose()?;

@@ -5,7 +5,9 @@
 //! without a `node` (`KHR_animation_pointer`), lights of a type a later extension may define.
 //! myriad renders the static pose, so animations are dropped here (counted, for the warning);
 //! a scene without nodes gets an empty list; a light of an unknown type becomes a placeholder
-//! the loader skips with a warning; an integer written as a float (`1.0`, which JSON does not
+//! the loader skips with a warning; an accessor of a type glTF does not define (which the
+//! validator lets pass where nothing reads it) becomes a placeholder that is an error where it
+//! is read; an integer written as a float (`1.0`, which JSON does not
 //! tell apart from `1`) becomes that integer.
 
 use std::collections::BTreeSet;
@@ -19,7 +21,13 @@ pub struct Tolerated {
     pub animations: usize,
     /// Indices of `KHR_lights_punctual` lights of an unknown type (now placeholders).
     pub unknown_lights: BTreeSet<usize>,
+    /// Accessors of a `type` glTF does not define, with it (now SCALAR placeholders, an
+    /// error where something reads them).
+    pub unknown_accessors: std::collections::BTreeMap<usize, String>,
 }
+
+/// The accessor types glTF defines.
+const ACCESSOR_TYPES: [&str; 7] = ["SCALAR", "VEC2", "VEC3", "VEC4", "MAT2", "MAT3", "MAT4"];
 
 /// Every integral number in `v` written as a float, as an integer (the crate's index and
 /// count fields refuse `1.0`; its float fields take integers).
@@ -50,6 +58,16 @@ pub fn tolerate(root: &mut Value) -> Tolerated {
     if let Some(scenes) = root.get_mut("scenes").and_then(Value::as_array_mut) {
         for scene in scenes.iter_mut().filter_map(Value::as_object_mut) {
             scene.entry("nodes").or_insert_with(|| Value::Array(Vec::new()));
+        }
+    }
+    let accessors = root.get_mut("accessors").and_then(Value::as_array_mut);
+    for (i, accessor) in accessors.into_iter().flatten().enumerate() {
+        let ty = accessor.get("type").and_then(Value::as_str).unwrap_or("").to_string();
+        if !ACCESSOR_TYPES.contains(&ty.as_str())
+            && let Some(obj) = accessor.as_object_mut()
+        {
+            t.unknown_accessors.insert(i, ty);
+            obj.insert("type".into(), Value::from("SCALAR"));
         }
     }
     let lights = root.pointer_mut("/extensions/KHR_lights_punctual/lights").and_then(Value::as_array_mut);
