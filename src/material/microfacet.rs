@@ -56,9 +56,16 @@ impl Ggx {
         if h.z <= 0.0 {
             return 0.0;
         }
-        let (x, y) = (h.x / self.alpha_x, h.y / self.alpha_y);
-        let t = x * x + y * y + h.z * h.z;
-        1.0 / (PI * self.alpha_x * self.alpha_y * t * t)
+        if self.is_isotropic() {
+            let a2 = self.alpha_x * self.alpha_x;
+            let t = h.z * h.z * (a2 - 1.0) + 1.0;
+            return a2 / (PI * t * t);
+        }
+        // 1/(π·αx·αy·((x/αx)² + (y/αy)² + z²)²) with (αx·αy)² brought into the square.
+        let a = self.alpha_x * self.alpha_y;
+        let (x, y, z) = (h.x * self.alpha_y, h.y * self.alpha_x, h.z * a);
+        let t = x * x + y * y + z * z;
+        a * a * a / (PI * t * t)
     }
 
     /// Smith Λ(w).

@@ -382,10 +382,15 @@ impl Material {
             }
             return Some(Bsdf::Diffuse(Diffuse { albedo: base }));
         }
-        let p = Principled::new(base, metallic, roughness, self.ior, self.specular, self.specular_color)
-            .with_coat(self.coat, self.coat_roughness)
-            .with_anisotropy(self.anisotropy_at(uv, images))
-            .with_sheen(self.sheen_at(uv, images), self.sheen_roughness_at(uv, images));
+        let mut p = Principled::new(base, metallic, roughness, self.ior, self.specular, self.specular_color)
+            .with_coat(self.coat, self.coat_roughness);
+        // Most materials have neither: they skip the lookups and the copies.
+        if self.anisotropy > 0.0 {
+            p = p.with_anisotropy(self.anisotropy_at(uv, images));
+        }
+        if self.sheen_color != Rgb::ZERO {
+            p = p.with_sheen(self.sheen_at(uv, images), self.sheen_roughness_at(uv, images));
+        }
         let p = if self.thin {
             p.with_thin_transmission(self.transmission, self.ior)
         } else {
@@ -399,10 +404,7 @@ impl Material {
     /// Anisotropy at `uv`.
     #[inline]
     fn anisotropy_at(&self, uv: Vec2, images: &[Image]) -> f32 {
-        match &self.anisotropy_texture {
-            Some(t) if self.anisotropy > 0.0 => self.anisotropy * t.sample(images, uv).z,
-            _ => self.anisotropy,
-        }
+        self.anisotropy * self.anisotropy_texture.as_ref().map_or(1.0, |t| t.sample(images, uv).z)
     }
 
     /// Sheen colour at `uv`.
@@ -419,10 +421,7 @@ impl Material {
     /// Sheen roughness at `uv`.
     #[inline]
     fn sheen_roughness_at(&self, uv: Vec2, images: &[Image]) -> f32 {
-        match &self.sheen_roughness_texture {
-            Some(t) if self.sheen_color != Rgb::ZERO => self.sheen_roughness * t.sample(images, uv).w,
-            _ => self.sheen_roughness,
-        }
+        self.sheen_roughness * self.sheen_roughness_texture.as_ref().map_or(1.0, |t| t.sample(images, uv).w)
     }
 }
 

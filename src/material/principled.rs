@@ -152,12 +152,9 @@ pub struct Principled {
     base: Rgb,
     metallic: f32,
     roughness: f32,
-    /// The metal's and the specular layer's distribution (anisotropic along local x).
+    /// The metal's and the specular layer's distribution (anisotropic along local x; the
+    /// glass's is isotropic of `roughness` whatever the anisotropy, [`Principled::glass_ggx`]).
     ggx: Ggx,
-    /// The roughness their energy tables read: (α_x·α_y)^¼ after clamping, as Cycles.
-    table_roughness: f32,
-    /// The glass's distribution: isotropic of `roughness` whatever the anisotropy.
-    glass_ggx: Ggx,
     metal: F82Tint,
     specular: Option<Specular>,
     coat: Option<Coat>,
@@ -168,8 +165,6 @@ pub struct Principled {
 /// What depends on the outgoing direction: the lobes' weights and the choice between them.
 #[derive(Clone, Copy, Debug)]
 struct View {
-    /// The sheen lobe from this direction, when there is one.
-    sheen: Option<SheenLobe>,
     coat: f32,
     metal: Rgb,
     specular: Rgb,
@@ -190,15 +185,13 @@ fn mean(c: Rgb) -> f32 {
 impl Principled {
     /// The model for base colour, metallic and roughness (in [0, 1]), IOR (> 1), specular
     /// factor (in [0, 1]) and specular colour (≥ 0).
+    #[inline]
     pub fn new(base: Rgb, metallic: f32, roughness: f32, ior: f32, specular: f32, specular_color: Rgb) -> Self {
-        let ggx = Ggx::from_roughness(roughness);
         Self {
             base,
             metallic,
             roughness,
-            ggx,
-            table_roughness: roughness,
-            glass_ggx: ggx,
+            ggx: Ggx::from_roughness(roughness),
             metal: F82Tint::new(base.min(Rgb::ONE), specular_color.min(Rgb::ONE)),
             specular: Specular::new(ior, specular, specular_color),
             coat: None,
@@ -209,22 +202,43 @@ impl Principled {
 
     /// The same with its metal and specular layer stretched by Blender's `anisotropic` (in
     /// [0, 1]) along the local x axis, the tangent.
+    #[inline]
     pub fn with_anisotropy(self, anisotropic: f32) -> Self {
         if !(anisotropic > 0.0) {
             return self;
         }
-        let ggx = Ggx::anisotropic(self.roughness, anisotropic);
-        Self { ggx, table_roughness: ggx.table_roughness(), ..self }
+        Self { ggx: Ggx::anisotropic(self.roughness, anisotropic), ..self }
+    }
+
+    /// The roughness the metal's and specular layer's energy tables read: (α_x·α_y)^¼ after
+    /// clamping when anisotropic, as Cycles.
+    #[inline]
+    fn table_roughness(&self) -> f32 {
+        if self.ggx.is_isotropic() { self.roughness } else { self.ggx.table_roughness() }
+    }
+
+    /// The glass's distribution.
+    #[inline]
+    fn glass_ggx(&self) -> Ggx {
+        if self.ggx.is_isotropic() { self.ggx } else { Ggx::from_roughness(self.roughness) }
+    }
+
+    /// The sheen lobe seen from `wo`, when there is one.
+    #[inline]
+    fn sheen_lobe(&self, wo: Vec3A) -> Option<SheenLobe> {
+        self.sheen.and_then(|s| s.at(wo))
     }
 
     /// The same under a sheen of `color` (Sheen Weight × Sheen Tint, ≥ 0) and `roughness`.
+    #[inline]
     pub fn with_sheen(self, color: Rgb, roughness: f32) -> Self {
-        let sheen = (color.max_element() > 0.0).then_some(Sheen { color, roughness });
+        let sheen = (color.max_element() > 0.0).then_some(Sheen { color: color.into(), roughness });
         Self { sheen, ..self }
     }
 
     /// The same with `transmission` (in [0, 1]) of its dielectric as glass, met at relative
     /// IOR `eta` (ior when the ray enters the object, 1/ior when it leaves).
+    #[inline]
     pub fn with_transmission(self, transmission: f32, eta: f32) -> Self {
         let tint = Rgb::new(self.base.x.sqrt(), self.base.y.sqrt(), self.base.z.sqrt());
         let glass =
@@ -234,6 +248,7 @@ impl Principled {
 
     /// The same with `transmission` (in [0, 1]) of its dielectric as a thin-walled sheet of
     /// `ior`, which light crosses without bending.
+    #[inline]
     pub fn with_thin_transmission(self, transmission: f32, ior: f32) -> Self {
         let glass =
             (transmission > 0.0).then_some(Glass { weight: transmission, eta: ior, tint: self.base, thin: true });
@@ -246,6 +261,7 @@ impl Principled {
     }
 
     /// The same with a coat of `weight` and `roughness` (both in [0, 1]) on top.
+    #[inline]
     pub fn with_coat(self, weight: f32, roughness: f32) -> Self {
         let layer = Specular::new(COAT_IOR, 1.0, Rgb::ONE).expect("IOR 1.5 reflects");
         let coat = (weight > 0.0).then(|| Coat { weight, roughness, ggx: Ggx::from_roughness(roughness), layer });
@@ -255,7 +271,8 @@ impl Principled {
     #[inline]
     fn view(&self, wo: Vec3A) -> View {
         let mu = wo.z;
-        let (e, e_avg) = (tables::albedo(self.table_roughness, mu), tables::albedo_average(self.table_roughness));
+        let rough = self.table_roughness();
+        let (e, e_avg) = (tables::albedo(rough, mu), tables::albedo_average(rough));
         let (metal_gain, _) = compensation(e, e_avg, self.metal.average());
         let metal = metal_gain * self.metallic;
         let transmission = self.glass.map_or(0.0, |g| g.weight);
@@ -282,7 +299,7 @@ impl Principled {
         let (specular, layer_albedo) = match &self.specular {
             Some(s) => {
                 let (gain, kept) = compensation(e, e_avg, s.average);
-                let albedo = kept * s.f0.lerp(Rgb::ONE, tables::fresnel_weight(self.table_roughness, mu, s.z));
+                let albedo = kept * s.f0.lerp(Rgb::ONE, tables::fresnel_weight(rough, mu, s.z));
                 (gain * dielectric, albedo.max_element().clamp(0.0, 1.0))
             }
             None => (Rgb::ZERO, 0.0),
@@ -301,16 +318,18 @@ impl Principled {
             None => (0.0, 0.0, 1.0),
         };
         // The sheen, on top of all, takes its albedo from everything under it likewise.
-        let sheen = self.sheen.and_then(|s| s.at(wo));
-        let top = sheen.map_or(1.0, |l| (1.0 - l.albedo()).clamp(0.0, 1.0));
-        let sheen_albedo = sheen.map_or(0.0, |l| mean(l.weight));
-        let (coat, coat_albedo, below) = (top * coat, top * coat_albedo, top * below);
+        let (sheen_albedo, coat, coat_albedo, below) = match self.sheen_lobe(wo) {
+            Some(l) => {
+                let top = (1.0 - l.albedo()).clamp(0.0, 1.0);
+                (mean(l.weight), top * coat, top * coat_albedo, top * below)
+            }
+            None => (0.0, coat, coat_albedo, below),
+        };
         let (glossy, glass_albedo) = (below * glossy, below * glass_albedo);
         let diffuse_albedo = below * mean(diffuse) * std::f32::consts::PI;
         let total = sheen_albedo + coat_albedo + glossy + glass_albedo + diffuse_albedo;
         let p = |x: f32| if total > 0.0 { x / total } else { 0.0 };
         View {
-            sheen,
             coat,
             metal: metal * below,
             specular: specular * below,
@@ -331,14 +350,14 @@ impl Principled {
                     let m = mirrored(wi);
                     let h = (wo + m).normalize();
                     let f = fresnel::dielectric(wo.dot(h), g.eta);
-                    let gg = &self.glass_ggx;
+                    let gg = self.glass_ggx();
                     let lobe = gg.d(h) * gg.g2(wo, m) / (4.0 * wo.z * m.z);
                     return g.tint * v.glass * ((1.0 - f) * lobe);
                 }
                 let Some((h, _, cos_o, cos_i)) = g.refraction(wo, wi) else { return Rgb::ZERO };
                 let f = fresnel::dielectric(cos_o, g.eta);
                 let denominator = cos_o + g.eta * cos_i;
-                let gg = &self.glass_ggx;
+                let gg = self.glass_ggx();
                 let geometry = gg.d(h) * gg.g2(wo, wi) * g.eta * g.eta * cos_o * cos_i.abs()
                     / (wo.z * wi.z.abs() * denominator * denominator);
                 g.tint * v.glass * ((1.0 - f) * geometry)
@@ -350,11 +369,11 @@ impl Principled {
         let specular = self.specular.map_or(Rgb::ZERO, |s| s.fresnel(mu) * v.specular);
         let base_lobe = lobe(&self.ggx);
         let glass = self.glass.map_or(Rgb::ZERO, |g| {
-            let glass_lobe = if self.ggx.is_isotropic() { base_lobe } else { lobe(&self.glass_ggx) };
+            let glass_lobe = if self.ggx.is_isotropic() { base_lobe } else { lobe(&self.glass_ggx()) };
             v.glass * (fresnel::dielectric(mu, g.eta) * glass_lobe)
         });
         let coat = self.coat.map_or(Rgb::ZERO, |c| c.layer.fresnel(mu) * (v.coat * lobe(&c.ggx)));
-        let sheen = v.sheen.map_or(Rgb::ZERO, |l| l.eval(wi));
+        let sheen = if v.p_sheen > 0.0 { self.sheen_lobe(wo).map_or(Rgb::ZERO, |l| l.eval(wi)) } else { Rgb::ZERO };
         sheen + coat + (self.metal.eval(mu) * v.metal + specular) * base_lobe + glass + v.diffuse
     }
 
@@ -365,10 +384,11 @@ impl Principled {
                 if g.thin {
                     let h = (wo + mirrored(wi)).normalize();
                     let f = fresnel::dielectric(wo.dot(h), g.eta);
-                    return v.p_glass * (1.0 - g.reflect_probability(f)) * self.glass_ggx.reflection_pdf(wo, h);
+                    return v.p_glass * (1.0 - g.reflect_probability(f)) * self.glass_ggx().reflection_pdf(wo, h);
                 }
                 let Some((h, jacobian, cos_o, _)) = g.refraction(wo, wi) else { return 0.0 };
-                let visible = self.glass_ggx.g1(wo) * cos_o * self.glass_ggx.d(h) / wo.z;
+                let gg = self.glass_ggx();
+                let visible = gg.g1(wo) * cos_o * gg.d(h) / wo.z;
                 v.p_glass * (1.0 - g.reflect_probability(fresnel::dielectric(cos_o, g.eta))) * visible * jacobian
             });
         }
@@ -376,9 +396,9 @@ impl Principled {
         let coat = self.coat.map_or(0.0, |c| v.p_coat * c.ggx.reflection_pdf(wo, h));
         let glass = self.glass.map_or(0.0, |g| {
             let f = fresnel::dielectric(wo.dot(h), g.eta);
-            v.p_glass * g.reflect_probability(f) * self.glass_ggx.reflection_pdf(wo, h)
+            v.p_glass * g.reflect_probability(f) * self.glass_ggx().reflection_pdf(wo, h)
         });
-        let sheen = v.sheen.map_or(0.0, |l| v.p_sheen * l.pdf(wi));
+        let sheen = if v.p_sheen > 0.0 { self.sheen_lobe(wo).map_or(0.0, |l| v.p_sheen * l.pdf(wi)) } else { 0.0 };
         let diffuse = (1.0 - v.p_sheen - v.p_coat - v.p_glossy - v.p_glass).max(0.0);
         sheen + coat + glass + v.p_glossy * self.ggx.reflection_pdf(wo, h) + diffuse * cosine_hemisphere_pdf(wi.z)
     }
@@ -443,14 +463,14 @@ impl PrincipledAt {
         let glass_from = glossy_from + v.p_glossy;
         let wi = match (u_lobe < coat_from, u_lobe < glossy_from, u_lobe < glass_from, u_lobe < glass_from + v.p_glass)
         {
-            (true, ..) => v.sheen?.sample(u),
+            (true, ..) => m.sheen_lobe(wo)?.sample(u),
             (_, true, ..) => reflect(&m.coat?.ggx),
             (_, _, true, _) => reflect(&m.ggx),
             (.., true) => {
                 // The rest of the lobe number decides between reflection and refraction.
                 // A direction on the wrong side for its lobe is dropped, as Cycles does.
                 let g = m.glass?;
-                let h = m.glass_ggx.sample_visible_normal(wo, u);
+                let h = m.glass_ggx().sample_visible_normal(wo, u);
                 let f = fresnel::dielectric(wo.dot(h), g.eta);
                 let reflected = 2.0 * wo.dot(h) * h - wo;
                 if (u_lobe - glass_from) / v.p_glass < g.reflect_probability(f) {

@@ -11,14 +11,15 @@
 
 use super::tables;
 use crate::math::warp::square_to_cosine_hemisphere;
-use crate::math::{Rgb, Vec2, Vec3A};
+use crate::math::{Rgb, Vec2, Vec3, Vec3A};
 use std::f32::consts::FRAC_1_PI;
 
 /// A sheen layer: its colour (Blender's Sheen Weight × Sheen Tint) and roughness in [0, 1].
+/// Unaligned (16 bytes): it rides in every Principled BSDF, which is copied per vertex.
 #[derive(Clone, Copy, Debug)]
 pub struct Sheen {
     /// Colour, ≥ 0.
-    pub color: Rgb,
+    pub color: Vec3,
     /// Roughness in [0, 1].
     pub roughness: f32,
 }
@@ -44,7 +45,7 @@ impl Sheen {
             return None;
         }
         let azimuth = Vec2::new(wo.x, wo.y).try_normalize().unwrap_or(Vec2::X);
-        Some(SheenLobe { weight: self.color * albedo, a, b, azimuth })
+        Some(SheenLobe { weight: Rgb::from(self.color) * albedo, a, b, azimuth })
     }
 }
 
@@ -127,7 +128,7 @@ mod tests {
     fn the_lobe_is_a_density_over_the_hemisphere() {
         for (roughness, mu) in [(0.3f32, 0.9f32), (0.5, 0.5), (0.8, 0.2), (1.0, 0.6)] {
             let wo = Vec3A::new((1.0 - mu * mu).sqrt() * 0.6, (1.0 - mu * mu).sqrt() * 0.8, mu);
-            let lobe = Sheen { color: Rgb::ONE, roughness }.at(wo).expect("a visible sheen");
+            let lobe = Sheen { color: Vec3::ONE, roughness }.at(wo).expect("a visible sheen");
             let v = integral(&lobe);
             assert!((v - 1.0).abs() < 0.01, "roughness {roughness}, μ {mu}: ∫D = {v}");
         }
