@@ -62,6 +62,10 @@ def parse():
     ap.add_argument('--light-tree', choices=['on', 'off'], default='on')
     ap.add_argument('--threads', type=int, default=int(os.environ.get('PEERS_THREADS', '2')))
     ap.add_argument('--emission-sides', choices=['gltf', 'two'], default='gltf')
+    ap.add_argument('--no-emitter-sampling', action='store_true',
+                    help="emissive meshes are found by BSDF rays only (emission_sampling NONE): Cycles' "
+                         "next-event estimation to an emitter inside rough glass overestimates (2.3 %% at "
+                         "roughness 0.45, 9.7 %% at 0.8), so lamps-in-glass references are made without it")
     ap.add_argument('--light-threshold', type=float, default=0.0)
     ap.add_argument('--filter', default='box', choices=['box', 'gaussian', 'blackman_harris'])
     ap.add_argument('--filter-width', type=float, default=1.0)
@@ -154,6 +158,9 @@ def main():
         else:
             mat.cycles.emission_sampling = 'FRONT_BACK'
             fixes['two_sided_emitters'] += 1
+        if a.no_emitter_sampling:
+            mat.cycles.emission_sampling = 'NONE'
+            fixes['emitters_unsampled'] = fixes.get('emitters_unsampled', 0) + 1
     if a.lambert:
         fixes['lambert_materials'] = 0
         for mat in bpy.data.materials:
