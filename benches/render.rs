@@ -8,7 +8,7 @@ use myriad::light_sampler::LightStrategy;
 use myriad::math::UVec2;
 use myriad::render::{Budget, RenderSettings, render};
 use myriad::scene::BuildOptions;
-use myriad::settings::LightSamplerKind;
+use myriad::settings::{Clamp, LightSamplerKind};
 use std::path::Path;
 
 fn scene(name: &str, res: UVec2) -> myriad::scene::Scene {
@@ -29,7 +29,14 @@ fn bench(c: &mut Criterion) {
             }
             let strategy = LightStrategy::build(kind, &s.lights, s.center, s.radius);
             let (budget, resolution) = (Budget::Spp(4), UVec2::new(80, 60));
-            let settings = RenderSettings { budget, seed: 0, max_depth: 8, resolution, aovs: Default::default() };
+            let settings = RenderSettings {
+                budget,
+                seed: 0,
+                max_depth: 8,
+                clamp: Clamp::OFF,
+                resolution,
+                aovs: Default::default(),
+            };
             group.bench_with_input(BenchmarkId::new(kind.name(), name), &name, |b, _| {
                 b.iter(|| render(&s, &strategy, &settings, &mut ()).stats.samples)
             });

@@ -19,7 +19,11 @@
 //! let scene = commands::load_scene(None, &opts.clone().into()).unwrap().scene;
 //! let strategy = LightStrategy::build(LightSamplerKind::Power, &scene.lights, scene.center, scene.radius);
 //! let settings = render::RenderSettings {
-//!     budget: render::Budget::Spp(4), seed: 1, max_depth: 4, resolution: UVec2::new(16, 12),
+//!     budget: render::Budget::Spp(4),
+//!     seed: 1,
+//!     max_depth: 4,
+//!     clamp: myriad::settings::Clamp::OFF,
+//!     resolution: UVec2::new(16, 12),
 //!     aovs: Default::default(),
 //! };
 //! let out = render::render(&scene, &strategy, &settings, &mut ());

@@ -15,7 +15,7 @@ use myriad::geometry::TracerKind;
 use myriad::io::LoadOptions;
 use myriad::math::UVec2;
 use myriad::scene::{BuildOptions, MAX_RESOLUTION};
-use myriad::settings::LightSamplerKind;
+use myriad::settings::{Clamp, LightSamplerKind};
 
 /// myriad: a path tracer for scenes lit by very many lights.
 ///
@@ -214,6 +214,9 @@ struct SlurmArgs {
     /// Maximum scattering events.
     #[arg(long, value_parser = parse_count, allow_negative_numbers = true)]
     max_depth: Option<u32>,
+    /// Sample clamping: INDIRECT or DIRECT,INDIRECT.
+    #[arg(long, value_parser = parse_clamp, allow_negative_numbers = true)]
+    clamp: Option<Clamp>,
     /// Output size, e.g. 640x480.
     #[arg(long, value_parser = parse_resolution)]
     resolution: Option<UVec2>,
@@ -256,6 +259,7 @@ impl SlurmArgs {
         flag("sampler", self.sampler.filter(|_| single).map(|s| s.name().to_string()));
         flag("seed", self.seed.filter(|_| single).map(|s| s.to_string()));
         flag("max-depth", self.max_depth.map(|d| d.to_string()));
+        flag("clamp", self.clamp.map(|c| format!("{},{}", c.direct, c.indirect)));
         flag("resolution", self.resolution.map(|r| format!("{}x{}", r.x, r.y)));
         flag("camera", self.camera.clone());
         flag("aov", (!self.aov.is_empty()).then(|| self.aov.join(",")));
@@ -346,6 +350,12 @@ struct CommonArgs {
     /// Direct lighting only (same as --max-depth 1): isolates the light sampler's noise.
     #[arg(long)]
     direct_only: bool,
+    /// Clamp fireflies as Cycles does: INDIRECT, or DIRECT,INDIRECT (Blender's Clamp Direct and
+    /// Clamp Indirect; 0 = none). A sample's contribution whose channels sum above the limit is
+    /// scaled down to it. It biases the picture darker: off unless given [default: the
+    /// scene's, else off].
+    #[arg(long, value_parser = parse_clamp, allow_negative_numbers = true)]
+    clamp: Option<Clamp>,
     /// Camera to use, by name (default: the scene's first); `auto` frames the whole scene
     /// from the front (for OBJ files, which carry no camera).
     #[arg(long)]
@@ -371,6 +381,7 @@ impl CommonArgs {
             seed: self.seed,
             max_depth: self.max_depth,
             direct_only: self.direct_only,
+            clamp: self.clamp,
         }
     }
 }
@@ -447,6 +458,11 @@ fn parse_seed(s: &str) -> Result<u64, String> {
         Ok(n) if (0..=u64::MAX as i128).contains(&n) => Ok(n as u64),
         _ => Err(format!("'{s}' is not a seed: give a whole number from 0 to {}", u64::MAX)),
     }
+}
+
+/// A `--clamp`: INDIRECT or DIRECT,INDIRECT, each a finite number ≥ 0.
+fn parse_clamp(s: &str) -> Result<Clamp, String> {
+    s.parse()
 }
 
 /// An index into a file's list (a glTF scene): a whole number from 0.

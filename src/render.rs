@@ -21,6 +21,7 @@ use crate::light_sampler::{LearnedStats, LightStrategy};
 use crate::math::UVec2;
 use crate::sampling::{Dim, SampleStream};
 use crate::scene::Scene;
+use crate::settings::Clamp;
 
 /// Rows per work item: small enough to balance 2–64 threads on a 240-row image.
 const ROWS_PER_BAND: u32 = 2;
@@ -61,6 +62,8 @@ pub struct RenderSettings {
     pub seed: u64,
     /// Maximum scattering events (1 = direct lighting only).
     pub max_depth: u32,
+    /// Sample clamping (off: the unbiased picture).
+    pub clamp: Clamp,
     /// Image size in pixels (the camera keeps its vertical field of view at any size).
     pub resolution: UVec2,
     /// Extra images to keep.
@@ -253,7 +256,8 @@ fn render_pass(pass: &Pass, film: &mut Film, recording: &Seen, watch: Watch) -> 
                     let timing = timing::is_timed(index as u64, s as u64);
                     tally.rays.timing = timing;
                     let start = if timing { timing::ticks() } else { 0 };
-                    let smp = path::radiance(scene, strategy, ray, &stream, settings.max_depth, &mut tally);
+                    let smp =
+                        path::radiance(scene, strategy, ray, &stream, settings.max_depth, settings.clamp, &mut tally);
                     if timing {
                         tally.rays.time.total += timing::ticks().wrapping_sub(start);
                     }

@@ -139,6 +139,7 @@ fn difference(a: &PartHeader, b: &PartHeader) -> String {
         ("tracer", a.tracer.clone(), b.tracer.clone()),
         ("seed", a.seed.to_string(), b.seed.to_string()),
         ("max depth", a.max_depth.to_string(), b.max_depth.to_string()),
+        ("clamp", a.clamp.to_string(), b.clamp.to_string()),
         ("resolution", format!("{:?}", a.resolution), format!("{:?}", b.resolution)),
         ("AOVs", a.aovs.join(","), b.aovs.join(",")),
     ];
@@ -151,7 +152,7 @@ fn difference(a: &PartHeader, b: &PartHeader) -> String {
 fn write_merged(opts: &MergeOptions, header: &PartHeader, film: &Film, png: Option<PathBuf>) -> Result<Vec<PathBuf>> {
     let h = header;
     let mut meta =
-        super::provenance::image_provenance(&h.scene, &h.sampler, &h.tracer, film.spp(), h.seed, h.max_depth);
+        super::provenance::image_provenance(&h.scene, &h.sampler, &h.tracer, film.spp(), h.seed, h.max_depth, h.clamp);
     meta.push(("myriad.samples".into(), format!("{}..{}", h.samples[0], h.samples[1])));
     meta.push(("myriad.parts_revision".into(), h.myriad.clone()));
     crate::io::exr::write(&opts.output, &film.layers(h.aov_set()), &meta)?;

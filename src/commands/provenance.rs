@@ -13,10 +13,11 @@ use crate::error::Result;
 use crate::fingerprint::{Fingerprint, revision};
 use crate::io::part::PartHeader;
 use crate::render::{RenderSettings, RenderStats};
-use crate::settings::LightSamplerKind;
+use crate::settings::{Clamp, LightSamplerKind};
 
 /// Header attributes recording how an image was made: this myriad's version and git
-/// revision, the scene, the sampler, the ray tracer, spp, seed and depth.
+/// revision, the scene, the sampler, the ray tracer, spp, seed, depth and, when it is on,
+/// the sample clamping (which biases the image).
 pub fn image_provenance(
     scene: &str,
     sampler: &str,
@@ -24,7 +25,9 @@ pub fn image_provenance(
     spp: u32,
     seed: u64,
     max_depth: u32,
+    clamp: Clamp,
 ) -> Vec<(String, String)> {
+    let clamped = clamp.is_on().then(|| ("myriad.clamp", clamp.to_string()));
     [
         ("myriad.version", env!("CARGO_PKG_VERSION").to_string()),
         ("myriad.git_revision", env!("MYRIAD_GIT_REVISION").to_string()),
@@ -36,6 +39,7 @@ pub fn image_provenance(
         ("myriad.max_depth", max_depth.to_string()),
     ]
     .into_iter()
+    .chain(clamped)
     .map(|(k, v)| (k.to_string(), v))
     .collect()
 }
@@ -49,7 +53,8 @@ pub fn provenance(
     settings: &RenderSettings,
     stats: &RenderStats,
 ) -> Vec<(String, String)> {
-    let mut meta = image_provenance(scene, sampler.name(), tracer, stats.spp, settings.seed, settings.max_depth);
+    let s = settings;
+    let mut meta = image_provenance(scene, sampler.name(), tracer, stats.spp, s.seed, s.max_depth, s.clamp);
     meta.push(("myriad.render_seconds".into(), format!("{:.6}", stats.elapsed.as_secs_f64())));
     meta
 }
@@ -97,6 +102,7 @@ pub fn part_header(
         tracer: tracer.to_string(),
         seed: settings.seed,
         max_depth: settings.max_depth,
+        clamp: settings.clamp,
         resolution: settings.resolution.to_array(),
         aovs: settings.aovs.names(),
         samples: [samples.0, samples.1],

@@ -8,7 +8,7 @@ use crate::error::{Error, Result};
 use crate::film::AovSet;
 use crate::math::UVec2;
 use crate::render::{Budget, RenderSettings};
-use crate::settings::{LightSamplerKind, RenderDefaults};
+use crate::settings::{Clamp, LightSamplerKind, RenderDefaults};
 
 /// Samples per pixel of `render` when neither the command line nor the scene says.
 pub const DEFAULT_SPP: u32 = 64;
@@ -40,6 +40,8 @@ pub struct RenderRequest {
     pub max_depth: Option<u32>,
     /// Direct lighting only: max depth 1, whatever else says.
     pub direct_only: bool,
+    /// Sample clamping.
+    pub clamp: Option<Clamp>,
 }
 
 /// Settings decided: every choice made.
@@ -53,12 +55,15 @@ pub struct Resolved {
     pub max_depth: u32,
     /// Light sampler.
     pub sampler: LightSamplerKind,
+    /// Sample clamping.
+    pub clamp: Clamp,
 }
 
 impl Resolved {
     /// The settings of a render with these choices of an image of `resolution` keeping `aovs`.
     pub fn render_settings(&self, resolution: UVec2, aovs: AovSet) -> RenderSettings {
-        RenderSettings { budget: self.budget, seed: self.seed, max_depth: self.max_depth, resolution, aovs }
+        let (budget, seed, max_depth, clamp) = (self.budget, self.seed, self.max_depth, self.clamp);
+        RenderSettings { budget, seed, max_depth, clamp, resolution, aovs }
     }
 }
 
@@ -82,6 +87,7 @@ impl RenderRequest {
             seed: self.seed.or(scene.seed).unwrap_or(0),
             max_depth,
             sampler: self.sampler.or(scene.sampler).unwrap_or(DEFAULT_SAMPLER),
+            clamp: self.clamp.or(scene.clamp).unwrap_or(Clamp::OFF),
         })
     }
 }
@@ -92,18 +98,35 @@ mod tests {
 
     #[test]
     fn the_command_line_wins_over_the_scene_which_wins_over_the_defaults() {
-        let scene =
-            RenderDefaults { spp: Some(8), max_depth: Some(3), sampler: Some(LightSamplerKind::Power), seed: Some(7) };
+        let scene = RenderDefaults {
+            spp: Some(8),
+            max_depth: Some(3),
+            sampler: Some(LightSamplerKind::Power),
+            seed: Some(7),
+            clamp: None,
+        };
         let none = RenderRequest::default();
         let from_scene = none.resolve(&scene, DEFAULT_SPP).unwrap();
         assert_eq!(
             from_scene,
-            Resolved { budget: Budget::Spp(8), seed: 7, max_depth: 3, sampler: LightSamplerKind::Power }
+            Resolved {
+                budget: Budget::Spp(8),
+                seed: 7,
+                max_depth: 3,
+                sampler: LightSamplerKind::Power,
+                clamp: Clamp::OFF
+            }
         );
         let defaults = none.resolve(&RenderDefaults::default(), COMPARE_DEFAULT_SPP).unwrap();
         assert_eq!(
             defaults,
-            Resolved { budget: Budget::Spp(16), seed: 0, max_depth: DEFAULT_MAX_DEPTH, sampler: DEFAULT_SAMPLER }
+            Resolved {
+                budget: Budget::Spp(16),
+                seed: 0,
+                max_depth: DEFAULT_MAX_DEPTH,
+                sampler: DEFAULT_SAMPLER,
+                clamp: Clamp::OFF
+            }
         );
         let asked = RenderRequest {
             spp: Some(2),
@@ -113,7 +136,16 @@ mod tests {
             ..Default::default()
         };
         let got = asked.resolve(&scene, DEFAULT_SPP).unwrap();
-        assert_eq!(got, Resolved { budget: Budget::Spp(2), seed: 1, max_depth: 1, sampler: LightSamplerKind::Uniform });
+        assert_eq!(
+            got,
+            Resolved {
+                budget: Budget::Spp(2),
+                seed: 1,
+                max_depth: 1,
+                sampler: LightSamplerKind::Uniform,
+                clamp: Clamp::OFF
+            }
+        );
         let timed = RenderRequest { time: Some(Duration::from_secs(3)), ..Default::default() };
         assert_eq!(timed.resolve(&scene, DEFAULT_SPP).unwrap().budget, Budget::Time(Duration::from_secs(3)));
         assert!(RenderRequest { spp: Some(0), ..Default::default() }.resolve(&scene, 1).is_err());

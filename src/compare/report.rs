@@ -130,6 +130,9 @@ pub struct CompareReport {
     pub resolution: [u32; 2],
     /// Maximum scattering events.
     pub max_depth: u32,
+    /// The runs' sample clamping, `off` or `DIRECT,INDIRECT` (the reference is not clamped,
+    /// so the bias column shows what clamping takes away).
+    pub clamp: String,
     /// Render threads.
     pub threads: usize,
     /// The reference.
@@ -253,11 +256,12 @@ impl CompareReport {
     pub fn markdown(&self, sheet: &str, plot: &str) -> String {
         let mut md = format!("# myriad compare: {}\n\n", self.scene);
         md += &format!(
-            "{}, {} × {} px, max depth {}, {} threads, {} seed(s). Reference: `{}` ({}{}).\n\n",
+            "{}, {} × {} px, max depth {}, clamp {}, {} threads, {} seed(s). Reference: `{}` ({}{}).\n\n",
             self.mode,
             self.resolution[0],
             self.resolution[1],
             self.max_depth,
+            self.clamp,
             self.threads,
             self.samplers.first().map_or(0, |s| s.runs.len()),
             self.reference.path,

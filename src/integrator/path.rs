@@ -5,7 +5,7 @@
 //! (1 = direct lighting only), estimate direct light, sample the BSDF, and from the fourth
 //! scattering event on ([`RR_MIN_DEPTH`]) play Russian roulette. Every random number is
 //! addressed by (bounce, `Dim`), so the choices of one decision never shift another's
-//! numbers.
+//! numbers. Each contribution may be clamped as Cycles clamps ([`Clamp`]; off by default).
 
 use super::direct::estimate_direct;
 use super::timing::timed;
@@ -18,6 +18,7 @@ use crate::material::ShadingPoint;
 use crate::math::{Rgb, Vec3A, power_heuristic};
 use crate::sampling::{Dim, SampleStream};
 use crate::scene::Scene;
+use crate::settings::Clamp;
 
 /// First-hit data of one camera sample, for the AOVs.
 #[derive(Clone, Copy, Debug, Default)]
@@ -180,13 +181,29 @@ fn survives_roulette(stream: &SampleStream, depth: u32, beta: &mut Rgb) -> bool 
     true
 }
 
-/// Radiance arriving along `ray` (a camera ray), with at most `max_depth` scattering events.
+/// `c` scaled down so that its channels sum to at most `limit` (0: no limit): Cycles' clamp of
+/// one contribution. Light reaching the camera after at most one scattering event is direct
+/// (next-event estimation at depth 0, emitters hit at depth 0 or 1), the rest indirect.
+#[inline]
+fn clamped(c: Rgb, limit: f32) -> Rgb {
+    if limit > 0.0 {
+        let sum = c.x.abs() + c.y.abs() + c.z.abs();
+        if sum > limit {
+            return c * (limit / sum);
+        }
+    }
+    c
+}
+
+/// Radiance arriving along `ray` (a camera ray), with at most `max_depth` scattering events,
+/// each contribution clamped by `clamp`.
 pub fn radiance(
     scene: &Scene,
     strategy: &LightStrategy,
     mut ray: Ray,
     stream: &SampleStream,
     max_depth: u32,
+    clamp: Clamp,
     tally: &mut Tally,
 ) -> PathSample {
     let mut l = Rgb::ZERO;
@@ -204,10 +221,11 @@ pub fn radiance(
         let hit = timed(counters.timing, &mut counters.time.closest, || scene.intersect(&ray, f32::INFINITY));
         if !scene.lamps.is_empty() && (prev.is_some() || scene.lamps.camera_visible()) {
             let t_end = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-            l += beta * lamps_seen(scene, strategy, &ray, t_end, prev, medium, counters);
+            let seen = beta * lamps_seen(scene, strategy, &ray, t_end, prev, medium, counters);
+            l += clamped(seen, clamp.limit(depth >= 2));
         }
         let Some(hit) = hit else {
-            l += beta * escaped(scene, strategy, ray.dir.normalize(), prev, counters);
+            l += clamped(beta * escaped(scene, strategy, ray.dir.normalize(), prev, counters), clamp.limit(depth >= 2));
             break;
         };
         if medium != Rgb::ZERO {
@@ -217,7 +235,7 @@ pub fn radiance(
         if depth == 0 {
             first_hit = Some(FirstHit::of(scene, &hit, wo));
         }
-        l += emitted(scene, strategy, &hit, ray.dir, prev, beta, counters);
+        l += clamped(emitted(scene, strategy, &hit, ray.dir, prev, beta, counters), clamp.limit(depth >= 2));
         if depth == max_depth {
             break;
         }
@@ -239,7 +257,8 @@ pub fn radiance(
         let sp = ShadingPoint::new(bsdf, hit.n_geom, n_shading, tangent, wo);
 
         if !scene.lights.is_empty() {
-            l += beta * estimate_direct(scene, strategy, &sp, hit.p, medium, stream, depth, tally);
+            let direct = beta * estimate_direct(scene, strategy, &sp, hit.p, medium, stream, depth, tally);
+            l += clamped(direct, clamp.limit(depth >= 1));
         }
 
         let u_lobe = if sp.chooses_lobes() { stream.get_1d(depth, Dim::BsdfLobe, 0) } else { 0.0 };

@@ -14,6 +14,7 @@ use super::write_atomically;
 use crate::error::{Error, Result};
 use crate::film::{AovSet, Film};
 use crate::math::UVec2;
+use crate::settings::Clamp;
 
 /// The first line of every part file.
 const MAGIC: &[u8] = b"myriad part 1\n";
@@ -40,6 +41,9 @@ pub struct PartHeader {
     pub seed: u64,
     /// Maximum scattering events.
     pub max_depth: u32,
+    /// Sample clamping (off in parts written before myriad had it).
+    #[serde(default)]
+    pub clamp: Clamp,
     /// Image size.
     pub resolution: [u32; 2],
     /// AOV names kept (albedo, normal, depth, variance).

@@ -215,6 +215,9 @@ impl Compiler<'_> {
                 return Err(Error::scene(self.source, format!("render.{name}"), "must be at least 1, not 0"));
             }
         }
+        if let Some(c) = file.render.clamp {
+            c.check().map_err(|m| Error::scene(self.source, "render.clamp", m))?;
+        }
         self.desc.render = file.render;
         Ok(())
     }

@@ -187,6 +187,42 @@ fn absurd_options_are_refused_with_the_reason() {
 }
 
 #[test]
+fn clamping_darkens_what_it_clamps_and_every_output_says_so() {
+    let (dir, _) = scene_file(GOOD);
+    let d = dir.path();
+    let mean_and_meta = |name: &str| {
+        let (layers, meta) = myriad::io::exr::read(&d.join(name)).unwrap();
+        let rgb = layers.rgb().unwrap();
+        let mean = rgb.iter().map(|c| (c.x + c.y + c.z) as f64).sum::<f64>() / rgb.len() as f64;
+        (mean, meta.into_iter().find(|(k, _)| k == "myriad.clamp").map(|(_, v)| v))
+    };
+    crate::split::ok(&["render", "scene.ron", "--spp", "16", "-o", "free.exr"], d);
+    crate::split::ok(&["render", "scene.ron", "--spp", "16", "--clamp", "0.3,0.05", "-o", "clamped.exr"], d);
+    let ((free, none), (clamped, said)) = (mean_and_meta("free.exr"), mean_and_meta("clamped.exr"));
+    assert!(none.is_none() && said.as_deref() == Some("0.3,0.05"), "{none:?} {said:?}");
+    assert!(clamped < 0.9 * free, "clamped mean {clamped} against {free}");
+    // A clamp as large as nothing reaches changes no bit.
+    crate::split::ok(&["render", "scene.ron", "--spp", "16", "--clamp", "1e30,1e30", "-o", "loose.exr"], d);
+    crate::split::same_pixels(&d.join("loose.exr"), &d.join("free.exr"));
+    // The same clamp from the scene file gives the same image.
+    let in_file = GOOD.replace(
+        "film: (resolution: (16, 12)),",
+        "film: (resolution: (16, 12)),\n    render: (clamp: (direct: 0.3, indirect: 0.05)),",
+    );
+    std::fs::write(d.join("clamped.ron"), &in_file).unwrap();
+    crate::split::ok(&["render", "clamped.ron", "--spp", "16", "-o", "from-file.exr"], d);
+    crate::split::same_pixels(&d.join("from-file.exr"), &d.join("clamped.exr"));
+    expect_failure(&in_file.replace("direct: 0.3", "direct: -0.3"), &["render", "scene.ron"], &["render.clamp", "≥ 0"]);
+    expect_usage_error(&["render", "scene.ron", "--clamp", "-1"], &["clamp", "≥ 0"]);
+    expect_usage_error(&["render", "scene.ron", "--clamp", "a,b"], &["'a' is not a number"]);
+    // compare clamps its runs, never its reference, and says so.
+    let args = ["compare", "scene.ron", "--samplers", "uniform", "--spp", "4", "--reference-spp", "8"];
+    crate::split::ok(&[&args[..], &["--clamp", "0.3,0.05", "--out-dir", "cmp"]].concat(), d);
+    let report = std::fs::read_to_string(d.join("cmp/report.md")).unwrap();
+    assert!(report.contains("clamp 0.3,0.05"), "{report}");
+}
+
+#[test]
 fn compare_on_a_broken_scene_leaves_no_folder() {
     let text = GOOD.replace("lights: [", "lights: [ Point(position: (0, 1.5, 0), intensity: (1e38, 1e38, 1e38)),");
     let (dir, _) = scene_file(&text);

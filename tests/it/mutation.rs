@@ -14,7 +14,7 @@ use myriad::light_sampler::LightStrategy;
 use myriad::math::UVec2;
 use myriad::render::{Budget, RenderSettings, render};
 use myriad::scene::{AUTO_CAMERA, BuildOptions};
-use myriad::settings::LightSamplerKind;
+use myriad::settings::{Clamp, LightSamplerKind};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -356,8 +356,14 @@ fn exercise(path: &Path) -> myriad::Result<()> {
     let (scene, resolution) = (loaded.scene, loaded.report.resolution);
     for kind in [LightSamplerKind::Tree, LightSamplerKind::Power] {
         let strategy = LightStrategy::build(kind, &scene.lights, scene.center, scene.radius);
-        let settings =
-            RenderSettings { budget: Budget::Spp(1), seed: 1, max_depth: 3, resolution, aovs: Default::default() };
+        let settings = RenderSettings {
+            budget: Budget::Spp(1),
+            seed: 1,
+            max_depth: 3,
+            clamp: Clamp::OFF,
+            resolution,
+            aovs: Default::default(),
+        };
         render(&scene, &strategy, &settings, &mut ());
     }
     Ok(())

@@ -11,14 +11,21 @@ use myriad::render::{Budget, OnPass, RenderSettings, render};
 use myriad::scene::BuildOptions;
 use myriad::scene::description::LightDesc;
 use myriad::scene::shapes::{box_mesh, quad_mesh};
-use myriad::settings::LightSamplerKind;
+use myriad::settings::{Clamp, LightSamplerKind};
 
 pub const ALL_KINDS: [LightSamplerKind; 7] = LightSamplerKind::EVERY;
 
 pub fn render_with(scene: &TestScene, kind: LightSamplerKind, spp: u32, max_depth: u32, seed: u64) -> Film {
     let strategy = LightStrategy::build(kind, &scene.lights, scene.center, scene.radius);
     let resolution = scene.resolution;
-    let settings = RenderSettings { budget: Budget::Spp(spp), seed, max_depth, resolution, aovs: Default::default() };
+    let settings = RenderSettings {
+        budget: Budget::Spp(spp),
+        seed,
+        max_depth,
+        clamp: Clamp::OFF,
+        resolution,
+        aovs: Default::default(),
+    };
     render(scene, &strategy, &settings, &mut ()).film
 }
 
@@ -307,8 +314,14 @@ fn pass_boundaries_do_not_change_pixels() {
     let scene = load_scene(None, &opts.clone().into()).unwrap().scene;
     let strategy = LightStrategy::build(LightSamplerKind::Uniform, &scene.lights, scene.center, scene.radius);
     let resolution = UVec2::new(8, 6);
-    let settings =
-        RenderSettings { budget: Budget::Spp(8), seed: 9, max_depth: 4, resolution, aovs: Default::default() };
+    let settings = RenderSettings {
+        budget: Budget::Spp(8),
+        seed: 9,
+        max_depth: 4,
+        clamp: Clamp::OFF,
+        resolution,
+        aovs: Default::default(),
+    };
     let mut passes = Vec::new();
     render(&scene, &strategy, &settings, &mut OnPass(|f: &myriad::film::Film, _| passes.push(f.spp())));
     assert_eq!(passes, [1, 2, 4, 8]);
@@ -333,8 +346,14 @@ fn a_progressive_render_in_passes_of_its_own_is_the_render_and_a_called_off_pass
             .unwrap()
             .scene;
     let strategy = LightStrategy::build(LightSamplerKind::Learned, &scene.lights, scene.center, scene.radius);
-    let settings =
-        RenderSettings { budget: Budget::Spp(8), seed: 4, max_depth: 3, resolution, aovs: Default::default() };
+    let settings = RenderSettings {
+        budget: Budget::Spp(8),
+        seed: 4,
+        max_depth: 3,
+        clamp: Clamp::OFF,
+        resolution,
+        aovs: Default::default(),
+    };
     let mut progressive = myriad::render::Progressive::new(&scene, &strategy, &settings);
     let go_on = std::sync::atomic::AtomicBool::new(false);
     let mut spp = 0;
@@ -360,8 +379,14 @@ fn the_image_size_is_a_render_setting_not_part_of_the_scene() {
     let (small, large) = (built(8, 6), built(16, 12));
     let strategy = LightStrategy::build(LightSamplerKind::Power, &small.lights, small.center, small.radius);
     let resolution = UVec2::new(16, 12);
-    let settings =
-        RenderSettings { budget: Budget::Spp(4), seed: 3, max_depth: 4, resolution, aovs: Default::default() };
+    let settings = RenderSettings {
+        budget: Budget::Spp(4),
+        seed: 3,
+        max_depth: 4,
+        clamp: Clamp::OFF,
+        resolution,
+        aovs: Default::default(),
+    };
     let a = render(&small, &strategy, &settings, &mut ()).film;
     let b = render(&large, &strategy, &settings, &mut ()).film;
     assert_eq!(a.size(), resolution);

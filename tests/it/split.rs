@@ -86,7 +86,9 @@ fn parts_that_do_not_belong_together_are_refused_by_name() {
     render("2..4", &["--seed", "9"], "seed.part");
     render("1..3", &[], "overlap.part");
     render("5..6", &[], "late.part");
+    render("2..4", &["--clamp", "3"], "clamp.part");
     fails(&["merge", "a.part", "seed.part", "-o", "x.exr"], d, &["seed.part", "does not belong", "seed 9"]);
+    fails(&["merge", "a.part", "clamp.part", "-o", "x.exr"], d, &["clamp.part", "does not belong", "clamp 0,3"]);
     fails(&["merge", "a.part", "overlap.part", "-o", "x.exr"], d, &["overlap.part", "1..3", "overlap"]);
     fails(&["merge", "a.part", "b.part", "late.part", "-o", "x.exr"], d, &["4..5", "--allow-gaps"]);
     std::fs::write(d.join("cut.part"), &std::fs::read(d.join("a.part")).unwrap()[..200]).unwrap();

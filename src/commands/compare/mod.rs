@@ -99,6 +99,7 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
         mode: plan.mode(),
         resolution: [size.x, size.y],
         max_depth: plan.max_depth,
+        clamp: plan.clamp.to_string(),
         threads: rayon::current_num_threads(),
         reference: reference.info,
         samplers: results,

@@ -32,6 +32,7 @@ pub(crate) fn html_page(
         ("mode", report.mode.clone()),
         ("size", format!("{} × {} px", size.x, size.y)),
         ("max depth", report.max_depth.to_string()),
+        ("clamp", report.clamp.clone()),
         ("threads", report.threads.to_string()),
         ("seeds", seeds.join(", ")),
         ("reference", format!("{} ({})", report.reference.path, report.reference.origin)),

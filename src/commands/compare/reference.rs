@@ -17,7 +17,7 @@ use crate::interrupt::Stop;
 use crate::light_sampler::LightStrategy;
 use crate::math::{Rgb, UVec2};
 use crate::render::{Budget, RenderSettings, render};
-use crate::settings::LightSamplerKind;
+use crate::settings::{Clamp, LightSamplerKind};
 
 /// The reference image and its per-pixel variance (zero when unknown).
 pub(crate) struct Reference {
@@ -145,7 +145,9 @@ pub(crate) fn reference(
     }
     let strategy = LightStrategy::build(sampler, &scene.lights, scene.center, scene.radius);
     let aovs = AovSet { variance: true, ..Default::default() };
-    let settings = RenderSettings { budget, seed: REFERENCE_SEED, max_depth, resolution: size, aovs };
+    // Never clamped: the reference is the unbiased picture.
+    let settings =
+        RenderSettings { budget, seed: REFERENCE_SEED, max_depth, clamp: Clamp::OFF, resolution: size, aovs };
     let out = render(scene, &strategy, &settings, &mut Progress::new(opts.progress, "ref"));
     // A reference stopped short is not the reference its key describes.
     if out.stats.stopped != Stop::No {

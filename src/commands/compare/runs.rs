@@ -113,6 +113,7 @@ pub(crate) fn load_run(dir: &Path, plan: &Plan, scene_hash: &str, kind: LightSam
         ("seed", h.seed.to_string(), seed.to_string()),
         ("samples", format!("{}..{}", h.samples[0], h.samples[1]), format!("0..{spp}")),
         ("max depth", h.max_depth.to_string(), plan.max_depth.to_string()),
+        ("clamp", h.clamp.to_string(), plan.clamp.to_string()),
         ("resolution", format!("{:?}", h.resolution), format!("{:?}", plan.resolution.to_array())),
         ("scene contents", h.scene_hash.clone(), scene_hash.to_string()),
     ];
