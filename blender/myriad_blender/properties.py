@@ -38,6 +38,19 @@ class MyriadSettings(bpy.types.PropertyGroup):
         min=1,
         max=1024,
     )
+    clamp_direct: bpy.props.FloatProperty(
+        name="Clamp Direct",
+        description="Scale down a direct-light sample whose channels sum above this (Cycles' Clamp Direct); "
+        "0: no clamping. Clamping darkens fireflies and biases the image",
+        default=0.0,
+        min=0.0,
+    )
+    clamp_indirect: bpy.props.FloatProperty(
+        name="Clamp Indirect",
+        description="The same for indirect light (Cycles' Clamp Indirect); 0: no clamping",
+        default=0.0,
+        min=0.0,
+    )
     seed: bpy.props.IntProperty(
         name="Seed", description="Seed of every random number: the same seed gives the same image", default=0, min=0
     )

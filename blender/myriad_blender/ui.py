@@ -46,6 +46,8 @@ class MYRIAD_PT_render(bpy.types.Panel):
         col.prop(settings, "time")
         col.prop(settings, "sampler")
         col.prop(settings, "max_depth")
+        col.prop(settings, "clamp_direct")
+        col.prop(settings, "clamp_indirect")
         col.prop(settings, "seed")
         layout.prop(settings, "binary")
 

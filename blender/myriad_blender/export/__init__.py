@@ -69,6 +69,7 @@ def export_scene(depsgraph, folder, settings):
             max_depth=str(settings.max_depth),
             sampler=settings.sampler,
             seed=str(settings.seed),
+            clamp=_clamp(settings),
         ),
         objects=objects,
         lights=light_list,
@@ -94,3 +95,11 @@ def bpy_file():
     import bpy
 
     return bpy.data.filepath or None
+
+
+def _clamp(settings):
+    """The render block's `clamp`, or None (no clamping: myriad's default)."""
+    direct, indirect = float(settings.clamp_direct), float(settings.clamp_indirect)
+    if direct <= 0.0 and indirect <= 0.0:
+        return None
+    return ron.record("", direct=f"{direct:g}", indirect=f"{indirect:g}")
