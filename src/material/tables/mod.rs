@@ -237,7 +237,7 @@ pub fn fresnel_weight(rough: f32, mu: f32, z: f32) -> f32 {
 #[inline]
 fn glass_axis(eta: f32) -> (f32, bool) {
     let outside = eta >= 1.0;
-    (fresnel::f0_from_ior(if outside { eta } else { 1.0 / eta }).powf(0.25), !outside)
+    (fresnel::f0_from_ior(if outside { eta } else { 1.0 / eta }).sqrt().sqrt(), !outside)
 }
 
 /// Albedo of a white rough glass interface of relative IOR `eta` at cos θo = `mu`.
