@@ -365,8 +365,7 @@ fn world_vertices(inst: &Instance, v: [Vec3A; 3]) -> [Vec3A; 3] {
 /// generated coordinates, with glTF's +Y up where Blender has +Z. Anisotropic materials
 /// without a direction texture stretch along it ([`Material::tangent`](crate::material::Material::tangent)).
 pub fn radial_tangents(positions: &[Vec3A]) -> Vec<Vec3A> {
-    let (lo, hi) =
-        positions.iter().fold((Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN)), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    let (lo, hi) = crate::math::point_bounds(positions.iter().copied());
     let center = (lo + hi) * 0.5;
     // Blender's texture space: a flat side counts as size 1, a tiny one as 1e-5.
     let size = ((hi - lo) * 0.5).to_array().map(|s| if s == 0.0 { 1.0 } else { s.max(1e-5) });

@@ -219,13 +219,15 @@ pub fn radiance(
         counters.rays += 1;
         counters.time.closest_rays += counters.timing as u64;
         let hit = timed(counters.timing, &mut counters.time.closest, || scene.intersect(&ray, f32::INFINITY));
+        // Light this ray brings is direct for the first two rays, then indirect (Cycles').
+        let arriving = clamp.limit(depth >= 2);
         if !scene.lamps.is_empty() && (prev.is_some() || scene.lamps.camera_visible()) {
             let t_end = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
             let seen = beta * lamps_seen(scene, strategy, &ray, t_end, prev, medium, counters);
-            l += clamped(seen, clamp.limit(depth >= 2));
+            l += clamped(seen, arriving);
         }
         let Some(hit) = hit else {
-            l += clamped(beta * escaped(scene, strategy, ray.dir.normalize(), prev, counters), clamp.limit(depth >= 2));
+            l += clamped(beta * escaped(scene, strategy, ray.dir.normalize(), prev, counters), arriving);
             break;
         };
         if medium != Rgb::ZERO {
@@ -235,7 +237,7 @@ pub fn radiance(
         if depth == 0 {
             first_hit = Some(FirstHit::of(scene, &hit, wo));
         }
-        l += clamped(emitted(scene, strategy, &hit, ray.dir, prev, beta, counters), clamp.limit(depth >= 2));
+        l += clamped(emitted(scene, strategy, &hit, ray.dir, prev, beta, counters), arriving);
         if depth == max_depth {
             break;
         }

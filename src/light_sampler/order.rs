@@ -37,11 +37,7 @@ impl SpatialOrder {
     /// The order of lights with bounds `bounds`: by the Morton code of their centres on a
     /// 1024³ grid over the centres' box, ties (and directional lights, last) by index.
     pub fn of(bounds: &[LightBounds]) -> Self {
-        let (mut lo, mut hi) = (Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN));
-        for b in bounds.iter().filter(|b| !b.infinite) {
-            lo = lo.min(b.centroid());
-            hi = hi.max(b.centroid());
-        }
+        let (lo, hi) = crate::math::point_bounds(bounds.iter().filter(|b| !b.infinite).map(LightBounds::centroid));
         let scale = 1023.0 / (hi - lo).max(Vec3A::splat(1e-12));
         let morton = |b: &LightBounds| -> u64 {
             if b.infinite {

@@ -161,18 +161,7 @@ mod tests {
         for (roughness, anisotropic) in [(0.4f32, 0.5f32), (0.7, 1.0)] {
             let g = Ggx::anisotropic(roughness, anisotropic);
             assert!(g.alpha_x > g.alpha_y && !g.is_isotropic());
-            let (nz, nphi) = (2000, 400);
-            let mut sum = 0.0f64;
-            for i in 0..nz {
-                let z = (i as f64 + 0.5) / nz as f64;
-                let r = (1.0 - z * z).sqrt();
-                for k in 0..nphi {
-                    let phi = (k as f64 + 0.5) / nphi as f64 * std::f64::consts::TAU;
-                    let h = Vec3A::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
-                    sum += g.d(h) as f64 * z;
-                }
-            }
-            let v = sum * std::f64::consts::TAU / (nz * nphi) as f64;
+            let v = crate::math::warp::hemisphere_integral(2000, 400, |h| (g.d(h) * h.z) as f64);
             assert!((v - 1.0).abs() < 2e-3, "roughness {roughness}, anisotropic {anisotropic}: {v}");
         }
     }

@@ -398,9 +398,7 @@ impl Material {
         };
         Some(Bsdf::Principled(p))
     }
-}
 
-impl Material {
     /// Anisotropy at `uv`.
     #[inline]
     fn anisotropy_at(&self, uv: Vec2, images: &[Image]) -> f32 {
@@ -411,10 +409,8 @@ impl Material {
     #[inline]
     fn sheen_at(&self, uv: Vec2, images: &[Image]) -> Rgb {
         match &self.sheen_color_texture {
-            Some(t) if self.sheen_color != Rgb::ZERO => {
-                self.sheen_color * Rgb::from(t.sample_srgb(images, uv).truncate())
-            }
-            _ => self.sheen_color,
+            Some(t) => self.sheen_color * Rgb::from(t.sample_srgb(images, uv).truncate()),
+            None => self.sheen_color,
         }
     }
 

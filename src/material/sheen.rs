@@ -109,27 +109,12 @@ impl SheenLobe {
 mod tests {
     use super::*;
 
-    /// ∫ D dω over the hemisphere by the midpoint rule in (cos θ, φ).
-    fn integral(lobe: &SheenLobe) -> f64 {
-        let (nz, nphi) = (400, 400);
-        let mut sum = 0.0;
-        for i in 0..nz {
-            let z = (i as f32 + 0.5) / nz as f32;
-            let r = (1.0 - z * z).sqrt();
-            for k in 0..nphi {
-                let phi = (k as f32 + 0.5) / nphi as f32 * std::f32::consts::TAU;
-                sum += lobe.pdf(Vec3A::new(r * phi.cos(), r * phi.sin(), z)) as f64;
-            }
-        }
-        sum * std::f64::consts::TAU / (nz * nphi) as f64
-    }
-
     #[test]
     fn the_lobe_is_a_density_over_the_hemisphere() {
         for (roughness, mu) in [(0.3f32, 0.9f32), (0.5, 0.5), (0.8, 0.2), (1.0, 0.6)] {
             let wo = Vec3A::new((1.0 - mu * mu).sqrt() * 0.6, (1.0 - mu * mu).sqrt() * 0.8, mu);
             let lobe = Sheen { color: Vec3::ONE, roughness }.at(wo).expect("a visible sheen");
-            let v = integral(&lobe);
+            let v = crate::math::warp::hemisphere_integral(400, 400, |w| lobe.pdf(w) as f64);
             assert!((v - 1.0).abs() < 0.01, "roughness {roughness}, μ {mu}: ∫D = {v}");
         }
     }

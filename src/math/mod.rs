@@ -26,6 +26,13 @@ pub fn luminance(c: Rgb) -> f32 {
     c.dot(LUMINANCE)
 }
 
+/// The smallest box holding `points`, as (lowest, highest) corner; for none, an empty box
+/// (every component of the lowest at `f32::MAX`, of the highest at `f32::MIN`).
+#[inline]
+pub fn point_bounds(points: impl IntoIterator<Item = Vec3A>) -> (Vec3A, Vec3A) {
+    points.into_iter().fold((Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN)), |(lo, hi), p| (lo.min(p), hi.max(p)))
+}
+
 /// `acos` clamped to its domain, so that dot products a hair above 1 give 0, not NaN.
 ///
 /// A polynomial (Abramowitz & Stegun 4.4.46, absolute error ≤ 2·10⁻⁸ before f32 rounding)

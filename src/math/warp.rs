@@ -99,6 +99,22 @@ pub fn square_to_triangle(u: Vec2) -> [f32; 3] {
     [b0, b1, 1.0 - b0 - b1]
 }
 
+/// ∫ f(ω) dω over the upper hemisphere by the midpoint rule on `nz × nphi` cells of
+/// (cos θ, φ), where dω = d(cos θ) dφ: how tests check that a density integrates to 1.
+#[cfg(test)]
+pub fn hemisphere_integral(nz: usize, nphi: usize, f: impl Fn(Vec3A) -> f64) -> f64 {
+    let mut sum = 0.0;
+    for i in 0..nz {
+        let z = (i as f64 + 0.5) / nz as f64;
+        let r = (1.0 - z * z).sqrt();
+        for k in 0..nphi {
+            let phi = (k as f64 + 0.5) / nphi as f64 * std::f64::consts::TAU;
+            sum += f(Vec3A::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32));
+        }
+    }
+    sum * std::f64::consts::TAU / (nz * nphi) as f64
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -10,7 +10,7 @@
 //! is read; an integer written as a float (`1.0`, which JSON does not
 //! tell apart from `1`) becomes that integer.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 
 use serde_json::Value;
 
@@ -23,7 +23,7 @@ pub struct Tolerated {
     pub unknown_lights: BTreeSet<usize>,
     /// Accessors of a `type` glTF does not define, with it (now SCALAR placeholders, an
     /// error where something reads them).
-    pub unknown_accessors: std::collections::BTreeMap<usize, String>,
+    pub unknown_accessors: BTreeMap<usize, String>,
 }
 
 /// The accessor types glTF defines.

@@ -141,10 +141,7 @@ impl<'a> Placer<'a> {
     /// Adds a shared mesh once, in object space, and each of its placements.
     fn place_shared(&mut self, mesh: &MeshDesc, placements: &[Placement]) -> Result<()> {
         // Each placement's box corners bound where its vertices land.
-        let (lo, hi) = mesh
-            .positions
-            .iter()
-            .fold((Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN)), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        let (lo, hi) = crate::math::point_bounds(mesh.positions.iter().copied());
         for &(m, name) in placements {
             for k in 0..8 {
                 let corner = Vec3A::select(glam::BVec3A::new(k & 1 != 0, k & 2 != 0, k & 4 != 0), hi, lo);
