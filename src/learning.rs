@@ -1,5 +1,5 @@
 //! What a render learns from its own paths: the one hook between the render loop and every
-//! method that learns (today the `learned` light sampler; path guiding plugs in here too).
+//! method that learns (the `learned` light sampler and path guiding).
 //!
 //! Owns: [`Seen`], what one worker's paths record during a pass (merged across workers by
 //! integer addition, so any grouping gives the same bits), and [`Learning`], the state a
@@ -11,9 +11,14 @@
 //!
 //! The integrator writes into a [`Seen`] through its `record_*` methods; the render loop
 //! asks [`Learning`] how long a pass may be, hands it each pass's [`Seen`], and renders
-//! with [`Learning::strategy`]. Nothing else in the core knows what is learned.
+//! with [`Learning::strategy`] and [`Learning::guide`]. Nothing else in the core knows what
+//! is learned.
 
+use std::sync::Arc;
+
+use crate::guiding::{Guide, GuideStats, Guiding, Records};
 use crate::light::LightId;
+use crate::math::Vec3A;
 use crate::light_sampler::{LearnedStats, LightStrategy, Observations, ShadingContext};
 
 pub use crate::light_sampler::LEARN_UNTIL;
@@ -24,12 +29,15 @@ pub use crate::light_sampler::LEARN_UNTIL;
 pub struct Seen {
     /// Light samples at shading points, for a light sampler that learns.
     light: Option<Observations>,
+    /// The light paths brought back through their vertices, for path guiding (one set of
+    /// atomic sums every worker adds to).
+    guide: Option<Arc<Records>>,
 }
 
 impl Seen {
     /// An empty record of the same kinds: what each worker of a pass starts from.
     pub fn empty_like(&self) -> Seen {
-        Seen { light: self.light.as_ref().map(|_| Observations::default()) }
+        Seen { light: self.light.as_ref().map(|_| Observations::default()), guide: self.guide.clone() }
     }
 
     /// Adds another worker's records.
@@ -41,7 +49,14 @@ impl Seen {
             }
             (a, b) => a.or(b),
         };
+        self.guide = self.guide.or(other.guide);
         self
+    }
+
+    /// Where path guiding's records go, when it learns.
+    #[inline]
+    pub fn guide_records(&self) -> Option<&Records> {
+        self.guide.as_deref()
     }
 
     /// Records one light sample at `ctx` of `strategy`'s sampler: the luminance `c` of its
@@ -65,23 +80,39 @@ impl Seen {
 /// The state a render learns into, and when it learns.
 #[derive(Debug)]
 pub struct Learning {
-    /// The light strategy as learned so far (a fresh copy of the one the render was given).
-    strategy: LightStrategy,
+    /// The light strategy as learned so far (a fresh copy of the one the render was given),
+    /// when its light sampler learns.
+    strategy: Option<LightStrategy>,
+    /// Path guiding, when the render guides.
+    guiding: Option<Guiding>,
     /// What passes since the last learning saw.
     pending: Seen,
+    /// Where the last learning was (samples per pixel).
+    learned_at: u32,
 }
 
 impl Learning {
-    /// Learning for a render with `strategy`: `None` when nothing in it learns (the render
-    /// then uses `strategy` as it is).
-    pub fn new(strategy: &LightStrategy) -> Option<Self> {
-        let strategy = strategy.fresh_learner()?;
-        Some(Self { strategy, pending: Seen::default() })
+    /// Learning for a render with `strategy`, guided (`guide`: the scene's bounding sphere)
+    /// or not: `None` when nothing in it learns (the render then uses `strategy` as it is).
+    pub fn new(strategy: &LightStrategy, guide: Option<(Vec3A, f32)>) -> Option<Self> {
+        let strategy = strategy.fresh_learner();
+        let guiding = guide.map(|(center, radius)| Guiding::new(center, radius));
+        (strategy.is_some() || guiding.is_some()).then(|| Self {
+            strategy,
+            guiding,
+            pending: Seen::default(),
+            learned_at: 0,
+        })
     }
 
-    /// The light strategy to render with now.
-    pub fn strategy(&self) -> &LightStrategy {
-        &self.strategy
+    /// The light strategy to render with now, when it learns.
+    pub fn strategy(&self) -> Option<&LightStrategy> {
+        self.strategy.as_ref()
+    }
+
+    /// The guide to render with now, when the render guides.
+    pub fn guide(&self) -> Option<&Guide> {
+        self.guiding.as_ref().map(Guiding::guide)
     }
 
     /// For a pass starting at sample `first`: the most samples it may take and what its
@@ -90,7 +121,11 @@ impl Learning {
     pub fn recording(&self, first: u32) -> Option<(u32, Seen)> {
         (first < LEARN_UNTIL).then(|| {
             let limit = (first + 1).next_power_of_two() - first;
-            (limit, Seen { light: Some(Observations::default()) })
+            let seen = Seen {
+                light: self.strategy.as_ref().map(|_| Observations::default()),
+                guide: self.guiding.as_ref().map(Guiding::records),
+            };
+            (limit, seen)
         })
     }
 
@@ -99,16 +134,25 @@ impl Learning {
     pub fn after_pass(&mut self, seen: Seen, end: u32) {
         self.pending = std::mem::take(&mut self.pending).merge(seen);
         if end.is_power_of_two() && end <= LEARN_UNTIL {
-            let Seen { light } = std::mem::take(&mut self.pending);
-            if let Some(light) = light {
-                self.strategy.learn(light);
+            let Seen { light, guide: _ } = std::mem::take(&mut self.pending);
+            if let (Some(strategy), Some(light)) = (self.strategy.as_mut(), light) {
+                strategy.learn(light);
             }
+            if let Some(g) = self.guiding.as_mut() {
+                g.learn(end - self.learned_at);
+            }
+            self.learned_at = end;
         }
     }
 
     /// What the light sampler has learned so far.
     pub fn light_stats(&self) -> Option<LearnedStats> {
-        self.strategy.learner().map(|l| l.stats())
+        self.strategy.as_ref()?.learner().map(|l| l.stats())
+    }
+
+    /// What path guiding has learned so far.
+    pub fn guide_stats(&self) -> Option<GuideStats> {
+        self.guiding.as_ref().map(Guiding::stats)
     }
 }
 
@@ -128,8 +172,9 @@ mod tests {
 
     #[test]
     fn only_a_strategy_that_learns_gets_learning_and_passes_end_at_powers_of_two() {
-        assert!(Learning::new(&strategy(LightSamplerKind::Tree)).is_none());
-        let learning = Learning::new(&strategy(LightSamplerKind::Learned)).expect("learned learns");
+        assert!(Learning::new(&strategy(LightSamplerKind::Tree), None).is_none());
+        assert!(Learning::new(&strategy(LightSamplerKind::Tree), Some((Vec3A::ZERO, 1.0))).is_some());
+        let learning = Learning::new(&strategy(LightSamplerKind::Learned), None).expect("learned learns");
         let limits: Vec<u32> = [0, 1, 2, 3, 5, 8, 15].iter().map(|&f| learning.recording(f).unwrap().0).collect();
         assert_eq!(limits, [1, 1, 2, 1, 3, 8, 1]);
         assert!(learning.recording(LEARN_UNTIL).is_none());

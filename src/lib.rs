@@ -23,6 +23,7 @@
 //!     seed: 1,
 //!     max_depth: 4,
 //!     clamp: myriad::settings::Clamp::OFF,
+//!     guiding: false,
 //!     resolution: UVec2::new(16, 12),
 //!     aovs: Default::default(),
 //! };
@@ -40,6 +41,7 @@ pub mod film;
 pub mod fingerprint;
 pub mod geometry;
 pub mod guard;
+pub mod guiding;
 pub mod image;
 pub mod integrator;
 pub mod interrupt;

@@ -217,6 +217,9 @@ struct SlurmArgs {
     /// Sample clamping: INDIRECT or DIRECT,INDIRECT.
     #[arg(long, value_parser = parse_clamp, allow_negative_numbers = true)]
     clamp: Option<Clamp>,
+    /// Path guiding: on or off.
+    #[arg(long, value_parser = parse_on_off)]
+    guiding: Option<bool>,
     /// Output size, e.g. 640x480.
     #[arg(long, value_parser = parse_resolution)]
     resolution: Option<UVec2>,
@@ -260,6 +263,7 @@ impl SlurmArgs {
         flag("seed", self.seed.filter(|_| single).map(|s| s.to_string()));
         flag("max-depth", self.max_depth.map(|d| d.to_string()));
         flag("clamp", self.clamp.map(|c| format!("{},{}", c.direct, c.indirect)));
+        flag("guiding", self.guiding.map(|g| if g { "on" } else { "off" }.to_string()));
         flag("resolution", self.resolution.map(|r| format!("{}x{}", r.x, r.y)));
         flag("camera", self.camera.clone());
         flag("aov", (!self.aov.is_empty()).then(|| self.aov.join(",")));
@@ -356,6 +360,10 @@ struct CommonArgs {
     /// scene's, else off].
     #[arg(long, value_parser = parse_clamp, allow_negative_numbers = true)]
     clamp: Option<Clamp>,
+    /// Path guiding: on (paths learn, between passes, where light came from and go there more
+    /// often) or off [default: the scene's, else off].
+    #[arg(long, value_parser = parse_on_off)]
+    guiding: Option<bool>,
     /// Camera to use, by name (default: the scene's first); `auto` frames the whole scene
     /// from the front (for OBJ files, which carry no camera).
     #[arg(long)]
@@ -382,6 +390,7 @@ impl CommonArgs {
             max_depth: self.max_depth,
             direct_only: self.direct_only,
             clamp: self.clamp,
+            guiding: self.guiding,
         }
     }
 }
@@ -457,6 +466,15 @@ fn parse_seed(s: &str) -> Result<u64, String> {
     match s.trim().parse::<i128>() {
         Ok(n) if (0..=u64::MAX as i128).contains(&n) => Ok(n as u64),
         _ => Err(format!("'{s}' is not a seed: give a whole number from 0 to {}", u64::MAX)),
+    }
+}
+
+/// `on` or `off`.
+fn parse_on_off(s: &str) -> Result<bool, String> {
+    match s {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => Err(format!("give on or off, not '{s}'")),
     }
 }
 

@@ -16,6 +16,7 @@ use rayon::prelude::*;
 use crate::film::{AovSet, Film};
 use crate::integrator::{RayCounters, Tally, path, timing};
 use crate::interrupt::{self, Stop};
+use crate::guiding::{Guide, GuideStats};
 use crate::learning::{LEARN_UNTIL, Learning, Seen};
 use crate::light_sampler::{LearnedStats, LightStrategy};
 use crate::math::UVec2;
@@ -64,6 +65,8 @@ pub struct RenderSettings {
     pub max_depth: u32,
     /// Sample clamping (off: the unbiased picture).
     pub clamp: Clamp,
+    /// Whether paths are guided by what earlier passes learned ([`crate::guiding`]).
+    pub guiding: bool,
     /// Image size in pixels (the camera keeps its vertical field of view at any size).
     pub resolution: UVec2,
     /// Extra images to keep.
@@ -156,6 +159,8 @@ pub struct RenderStats {
     pub non_finite_samples: u64,
     /// What a learning light sampler learned (its memory, the time learning took).
     pub learned: Option<LearnedStats>,
+    /// What path guiding learned (its memory, the time learning took).
+    pub guide: Option<GuideStats>,
     /// Whether the user stopped the render ([`Stop::AfterPass`]: the film holds the passes
     /// finished; [`Stop::Now`]: it is incomplete and must not be written).
     pub stopped: Stop,
@@ -170,6 +175,7 @@ impl Default for RenderStats {
             rays: RayCounters::default(),
             non_finite_samples: 0,
             learned: None,
+            guide: None,
             stopped: Stop::No,
         }
     }
@@ -200,6 +206,7 @@ pub struct RenderOutput {
 struct Pass<'a> {
     scene: &'a Scene,
     strategy: &'a LightStrategy,
+    guide: Option<&'a Guide>,
     settings: &'a RenderSettings,
     first: u32,
     count: u32,
@@ -227,7 +234,8 @@ struct PassTally {
 /// worker, merged), empty when nothing learns.
 fn render_pass(pass: &Pass, film: &mut Film, recording: &Seen, watch: Watch) -> PassTally {
     let called_off = || watch.cancel.is_some_and(|c| c.load(Ordering::Relaxed));
-    let Pass { scene, strategy, settings, first, count } = *pass;
+    let Pass { scene, strategy, guide, settings, first, count } = *pass;
+    let tracer = path::Tracer { scene, strategy, guide, max_depth: settings.max_depth, clamp: settings.clamp };
     let size = settings.resolution;
     let bands: Vec<_> = film.bands_mut(ROWS_PER_BAND).collect();
     // Each worker sums its bands' counts and records; every sum is of integers, so the
@@ -256,8 +264,7 @@ fn render_pass(pass: &Pass, film: &mut Film, recording: &Seen, watch: Watch) -> 
                     let timing = timing::is_timed(index as u64, s as u64);
                     tally.rays.timing = timing;
                     let start = if timing { timing::ticks() } else { 0 };
-                    let smp =
-                        path::radiance(scene, strategy, ray, &stream, settings.max_depth, settings.clamp, &mut tally);
+                    let smp = tracer.radiance(ray, &stream, &mut tally);
                     if timing {
                         tally.rays.time.total += timing::ticks().wrapping_sub(start);
                     }
@@ -314,14 +321,20 @@ fn next_pass(budget: Budget, done: u32, per_spp: Option<Duration>, elapsed: Dura
 
 /// Renders samples `0..end` into a film that is then dropped: the state `learning` a render
 /// of a sample range starting at `end` needs (see [`crate::learning`]).
-fn train(learning: &mut Learning, scene: &Scene, settings: &RenderSettings, end: u32) -> RayCounters {
+fn train(
+    learning: &mut Learning,
+    scene: &Scene,
+    strategy: &LightStrategy,
+    settings: &RenderSettings,
+    end: u32,
+) -> RayCounters {
     let mut film = Film::new(settings.resolution, false);
     let mut rays = RayCounters::default();
     while film.spp() < end {
         let first = film.spp();
         let (limit, recording) = learning.recording(first).expect("training stays within the learning");
         let count = limit.min(end - first);
-        let pass = Pass { scene, strategy: learning.strategy(), settings, first, count };
+        let pass = Pass { scene, strategy: learning.strategy().unwrap_or(strategy), guide: learning.guide(), settings, first, count };
         let tally = render_pass(&pass, &mut film, &recording, Watch::default());
         rays.add(&tally.rays);
         learning.after_pass(tally.seen, first + count);
@@ -353,10 +366,11 @@ impl<'a> Progressive<'a> {
     /// starting past 0 first trains a learning strategy on the samples before it.
     pub fn new(scene: &'a Scene, strategy: &'a LightStrategy, settings: &RenderSettings) -> Self {
         let offset = settings.budget.fixed().map_or(0, |f| f.0);
-        let mut learning = Learning::new(strategy);
+        let guide = settings.guiding.then_some((scene.center, scene.radius));
+        let mut learning = Learning::new(strategy, guide);
         let mut rays = RayCounters::default();
         if let Some(l) = learning.as_mut().filter(|_| offset > 0) {
-            rays.add(&train(l, scene, settings, offset.min(LEARN_UNTIL)));
+            rays.add(&train(l, scene, strategy, settings, offset.min(LEARN_UNTIL)));
         }
         let film = Film::new(settings.resolution, settings.aovs.wants_first_hit());
         Self { scene, strategy, settings: *settings, film, learning, offset, rays, non_finite: 0 }
@@ -382,8 +396,10 @@ impl<'a> Progressive<'a> {
             Some((limit, seen)) => (count.min(limit), seen),
             None => (count, Seen::default()),
         };
-        let strategy = self.learning.as_ref().map_or(self.strategy, Learning::strategy);
-        let pass = Pass { scene: self.scene, strategy, settings: &self.settings, first, count };
+        let learned = self.learning.as_ref();
+        let strategy = learned.and_then(Learning::strategy).unwrap_or(self.strategy);
+        let guide = learned.and_then(Learning::guide);
+        let pass = Pass { scene: self.scene, strategy, guide, settings: &self.settings, first, count };
         let tally = render_pass(&pass, &mut self.film, &seen, Watch { progress, cancel });
         if tally.cancelled {
             return None;
@@ -412,6 +428,7 @@ impl<'a> Progressive<'a> {
             rays: self.rays,
             non_finite_samples: self.non_finite,
             learned: self.learning.as_ref().and_then(Learning::light_stats),
+            guide: self.learning.as_ref().and_then(Learning::guide_stats),
             stopped,
         };
         RenderOutput { film: self.film, stats }

@@ -156,6 +156,8 @@ pub struct RenderDefaults {
     pub seed: Option<u64>,
     /// Sample clamping, e.g. `clamp: (indirect: 10)`; none by default.
     pub clamp: Option<Clamp>,
+    /// Path guiding, `true` or `false`.
+    pub guiding: Option<bool>,
 }
 
 #[cfg(test)]

@@ -130,6 +130,10 @@ fn check_ranges(parts: &[(PathBuf, PartHeader)], allow_gaps: bool) -> Result<(Ra
     Ok((ranges, gaps))
 }
 
+fn on_off(b: bool) -> String {
+    if b { "on" } else { "off" }.to_string()
+}
+
 /// What differs between two parts' identities, for the message.
 fn difference(a: &PartHeader, b: &PartHeader) -> String {
     let fields = [
@@ -140,6 +144,7 @@ fn difference(a: &PartHeader, b: &PartHeader) -> String {
         ("seed", a.seed.to_string(), b.seed.to_string()),
         ("max depth", a.max_depth.to_string(), b.max_depth.to_string()),
         ("clamp", a.clamp.to_string(), b.clamp.to_string()),
+        ("guiding", on_off(a.guiding), on_off(b.guiding)),
         ("resolution", format!("{:?}", a.resolution), format!("{:?}", b.resolution)),
         ("AOVs", a.aovs.join(","), b.aovs.join(",")),
     ];
@@ -152,7 +157,7 @@ fn difference(a: &PartHeader, b: &PartHeader) -> String {
 fn write_merged(opts: &MergeOptions, header: &PartHeader, film: &Film, png: Option<PathBuf>) -> Result<Vec<PathBuf>> {
     let h = header;
     let mut meta =
-        super::provenance::image_provenance(&h.scene, &h.sampler, &h.tracer, film.spp(), h.seed, h.max_depth, h.clamp);
+        super::provenance::image_provenance(&h.scene, &h.sampler, &h.tracer, film.spp(), h.seed, h.max_depth, h.clamp, h.guiding);
     meta.push(("myriad.samples".into(), format!("{}..{}", h.samples[0], h.samples[1])));
     meta.push(("myriad.parts_revision".into(), h.myriad.clone()));
     crate::io::exr::write(&opts.output, &film.layers(h.aov_set()), &meta)?;

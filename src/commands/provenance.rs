@@ -16,8 +16,9 @@ use crate::render::{RenderSettings, RenderStats};
 use crate::settings::{Clamp, LightSamplerKind};
 
 /// Header attributes recording how an image was made: this myriad's version and git
-/// revision, the scene, the sampler, the ray tracer, spp, seed, depth and, when it is on,
-/// the sample clamping (which biases the image).
+/// revision, the scene, the sampler, the ray tracer, spp, seed, depth and, when they are on,
+/// the sample clamping (which biases the image) and path guiding.
+#[allow(clippy::too_many_arguments)]
 pub fn image_provenance(
     scene: &str,
     sampler: &str,
@@ -26,8 +27,10 @@ pub fn image_provenance(
     seed: u64,
     max_depth: u32,
     clamp: Clamp,
+    guiding: bool,
 ) -> Vec<(String, String)> {
     let clamped = clamp.is_on().then(|| ("myriad.clamp", clamp.to_string()));
+    let guided = guiding.then(|| ("myriad.guiding", "on".to_string()));
     [
         ("myriad.version", env!("CARGO_PKG_VERSION").to_string()),
         ("myriad.git_revision", env!("MYRIAD_GIT_REVISION").to_string()),
@@ -40,6 +43,7 @@ pub fn image_provenance(
     ]
     .into_iter()
     .chain(clamped)
+    .chain(guided)
     .map(|(k, v)| (k.to_string(), v))
     .collect()
 }
@@ -54,7 +58,7 @@ pub fn provenance(
     stats: &RenderStats,
 ) -> Vec<(String, String)> {
     let s = settings;
-    let mut meta = image_provenance(scene, sampler.name(), tracer, stats.spp, s.seed, s.max_depth, s.clamp);
+    let mut meta = image_provenance(scene, sampler.name(), tracer, stats.spp, s.seed, s.max_depth, s.clamp, s.guiding);
     meta.push(("myriad.render_seconds".into(), format!("{:.6}", stats.elapsed.as_secs_f64())));
     meta
 }
@@ -103,6 +107,7 @@ pub fn part_header(
         seed: settings.seed,
         max_depth: settings.max_depth,
         clamp: settings.clamp,
+        guiding: settings.guiding,
         resolution: settings.resolution.to_array(),
         aovs: settings.aovs.names(),
         samples: [samples.0, samples.1],

@@ -344,6 +344,18 @@ impl fmt::Display for RenderReport {
                 human_duration(l.learning_time)
             )?;
         }
+        if let Some(g) = &st.guide {
+            writeln!(
+                f,
+                "guiding    {} regions, {} quadtree nodes, from {} path vertices (passes up to {} spp), {} in {}",
+                g.regions,
+                g.nodes,
+                g.records,
+                crate::learning::LEARN_UNTIL.min(st.spp),
+                human_bytes(g.memory_bytes as u64),
+                human_duration(g.learning_time)
+            )?;
+        }
         if st.stopped == Stop::AfterPass {
             writeln!(f, "stopped    interrupted after {} spp; the files hold what was rendered", st.spp)?;
         }

@@ -21,6 +21,8 @@ pub const DEFAULT_MAX_DEPTH: u32 = 8;
 /// is the tree outside the 8 to 1024 lights its tables take (`tools/equal_time.py`: it is
 /// never behind the tree at equal time there, and up to 1.28× ahead on the Cornell grids).
 pub const DEFAULT_SAMPLER: LightSamplerKind = LightSamplerKind::Cells;
+/// Whether paths are guided when neither the command line nor the scene says.
+pub const DEFAULT_GUIDING: bool = false;
 
 /// Render settings as the command line gives them; `None` (and `false`) leave the choice to
 /// the scene file, then to the defaults.
@@ -42,6 +44,8 @@ pub struct RenderRequest {
     pub direct_only: bool,
     /// Sample clamping.
     pub clamp: Option<Clamp>,
+    /// Path guiding.
+    pub guiding: Option<bool>,
 }
 
 /// Settings decided: every choice made.
@@ -57,13 +61,15 @@ pub struct Resolved {
     pub sampler: LightSamplerKind,
     /// Sample clamping.
     pub clamp: Clamp,
+    /// Path guiding.
+    pub guiding: bool,
 }
 
 impl Resolved {
     /// The settings of a render with these choices of an image of `resolution` keeping `aovs`.
     pub fn render_settings(&self, resolution: UVec2, aovs: AovSet) -> RenderSettings {
-        let (budget, seed, max_depth, clamp) = (self.budget, self.seed, self.max_depth, self.clamp);
-        RenderSettings { budget, seed, max_depth, clamp, resolution, aovs }
+        let Resolved { budget, seed, max_depth, clamp, guiding, .. } = *self;
+        RenderSettings { budget, seed, max_depth, clamp, guiding, resolution, aovs }
     }
 }
 
@@ -88,6 +94,7 @@ impl RenderRequest {
             max_depth,
             sampler: self.sampler.or(scene.sampler).unwrap_or(DEFAULT_SAMPLER),
             clamp: self.clamp.or(scene.clamp).unwrap_or(Clamp::OFF),
+            guiding: self.guiding.or(scene.guiding).unwrap_or(DEFAULT_GUIDING),
         })
     }
 }
@@ -104,6 +111,7 @@ mod tests {
             sampler: Some(LightSamplerKind::Power),
             seed: Some(7),
             clamp: None,
+            guiding: None,
         };
         let none = RenderRequest::default();
         let from_scene = none.resolve(&scene, DEFAULT_SPP).unwrap();
@@ -114,7 +122,8 @@ mod tests {
                 seed: 7,
                 max_depth: 3,
                 sampler: LightSamplerKind::Power,
-                clamp: Clamp::OFF
+                clamp: Clamp::OFF,
+                guiding: DEFAULT_GUIDING,
             }
         );
         let defaults = none.resolve(&RenderDefaults::default(), COMPARE_DEFAULT_SPP).unwrap();
@@ -125,7 +134,8 @@ mod tests {
                 seed: 0,
                 max_depth: DEFAULT_MAX_DEPTH,
                 sampler: DEFAULT_SAMPLER,
-                clamp: Clamp::OFF
+                clamp: Clamp::OFF,
+                guiding: DEFAULT_GUIDING,
             }
         );
         let asked = RenderRequest {
@@ -143,7 +153,8 @@ mod tests {
                 seed: 1,
                 max_depth: 1,
                 sampler: LightSamplerKind::Uniform,
-                clamp: Clamp::OFF
+                clamp: Clamp::OFF,
+                guiding: DEFAULT_GUIDING,
             }
         );
         let timed = RenderRequest { time: Some(Duration::from_secs(3)), ..Default::default() };

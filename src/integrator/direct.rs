@@ -7,12 +7,12 @@
 //! at diffuse points), every light gets its own point (`Dim::LightPoint`, sub-index = light)
 //! and selection pmf 1. Delta lights get weight 1: BSDF sampling cannot find them.
 
+use super::guided::Scattering;
 use super::timing::timed;
 use super::{RayCounters, Tally};
 use crate::geometry::{Ray, offset_ray_origin};
 use crate::light::Light;
 use crate::light_sampler::{LightStrategy, ShadingContext};
-use crate::material::ShadingPoint;
 use crate::math::{Rgb, Vec3A, luminance, power_heuristic};
 use crate::sampling::{Dim, SampleStream};
 use crate::scene::Scene;
@@ -27,7 +27,7 @@ fn light_contribution(
     scene: &Scene,
     light: &Light,
     pmf: f32,
-    sp: &ShadingPoint,
+    scattering: &Scattering,
     p: Vec3A,
     medium: Rgb,
     u: [u64; 2],
@@ -35,6 +35,7 @@ fn light_contribution(
     observe: impl FnOnce(f32, bool),
 ) -> Rgb {
     let Some(ls) = light.sample_li(p, u, &scene.images) else { return Rgb::ZERO };
+    let sp = &scattering.sp;
     let f = sp.eval_cos(ls.wi);
     if f == Rgb::ZERO || !(ls.pdf > 0.0) {
         return Rgb::ZERO;
@@ -59,24 +60,26 @@ fn light_contribution(
     if occluded {
         return Rgb::ZERO;
     }
-    let weight = if light.is_delta() { 1.0 } else { power_heuristic(pmf * ls.pdf, sp.pdf(ls.wi)) };
+    let weight = if light.is_delta() { 1.0 } else { power_heuristic(pmf * ls.pdf, scattering.pdf(ls.wi)) };
     unshadowed * weight
 }
 
-/// Direct light reflected towards the viewer of `sp` at surface point `p` (inside a volume
-/// of absorption `medium`, zero outside), estimated with `strategy`.
+/// Direct light reflected towards the viewer of `scattering` at surface point `p` (inside a
+/// volume of absorption `medium`, zero outside), estimated with `strategy` and weighed
+/// against the density `scattering` samples directions with.
 #[inline]
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_direct(
     scene: &Scene,
     strategy: &LightStrategy,
-    sp: &ShadingPoint,
+    scattering: &Scattering,
     p: Vec3A,
     medium: Rgb,
     stream: &SampleStream,
     bounce: u32,
     tally: &mut Tally,
 ) -> Rgb {
+    let sp = &scattering.sp;
     let every = strategy.takes_every_light(sp.is_diffuse());
     match strategy.sampler().filter(|_| !every) {
         None => scene
@@ -85,7 +88,7 @@ pub fn estimate_direct(
             .enumerate()
             .map(|(i, light)| {
                 let u = stream.get_2d_u64(bounce, Dim::LightPoint, i as u32);
-                light_contribution(scene, light, 1.0, sp, p, medium, u, &mut tally.rays, |_, _| {})
+                light_contribution(scene, light, 1.0, scattering, p, medium, u, &mut tally.rays, |_, _| {})
             })
             .fold(Rgb::ZERO, |a, b| a + b),
         Some(sampler) => {
@@ -101,7 +104,7 @@ pub fn estimate_direct(
                     let light = &scene.lights[s.light.0 as usize];
                     let Tally { rays, seen } = tally;
                     let observe = |c, visible| seen.record_light_sample(strategy, &ctx, s.light, c, visible);
-                    light_contribution(scene, light, s.pmf, sp, p, medium, u_point, rays, observe)
+                    light_contribution(scene, light, s.pmf, scattering, p, medium, u_point, rays, observe)
                 }
                 None => Rgb::ZERO,
             }

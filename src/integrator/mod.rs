@@ -7,10 +7,11 @@
 //! sampling; knows nothing of pixels or threads.
 
 pub mod direct;
+pub mod guided;
 pub mod path;
 pub mod timing;
 
-pub use path::FirstHit;
+pub use path::{FirstHit, Tracer};
 
 use crate::learning::Seen;
 use crate::math::Rgb;

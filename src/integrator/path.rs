@@ -8,10 +8,12 @@
 //! numbers. Each contribution may be clamped as Cycles clamps ([`Clamp`]; off by default).
 
 use super::direct::estimate_direct;
+use super::guided::{Scattering, Trail};
 use super::timing::timed;
 use super::transmittance;
 use super::{RayCounters, Tally};
 use crate::geometry::{Ray, SurfaceHit};
+use crate::guiding::Guide;
 use crate::light::{Light, LightId};
 use crate::light_sampler::{LightStrategy, ShadingContext};
 use crate::material::ShadingPoint;
@@ -195,95 +197,112 @@ fn clamped(c: Rgb, limit: f32) -> Rgb {
     c
 }
 
-/// Radiance arriving along `ray` (a camera ray), with at most `max_depth` scattering events,
-/// each contribution clamped by `clamp`.
-pub fn radiance(
-    scene: &Scene,
-    strategy: &LightStrategy,
-    mut ray: Ray,
-    stream: &SampleStream,
-    max_depth: u32,
-    clamp: Clamp,
-    tally: &mut Tally,
-) -> PathSample {
-    let mut l = Rgb::ZERO;
-    let mut first_hit = None;
-    let mut beta = Rgb::ONE;
-    // The previous vertex, for MIS at emitter hits.
-    let mut prev: Option<Previous> = None;
-    // The absorption of the glass the ray travels through (zero outside any).
-    let mut medium = Rgb::ZERO;
-    let mut depth = 0u32;
-    loop {
-        let counters = &mut tally.rays;
-        counters.rays += 1;
-        counters.time.closest_rays += counters.timing as u64;
-        let hit = timed(counters.timing, &mut counters.time.closest, || scene.intersect(&ray, f32::INFINITY));
-        // Light this ray brings is direct for the first two rays, then indirect (Cycles').
-        let arriving = clamp.limit(depth >= 2);
-        if !scene.lamps.is_empty() && (prev.is_some() || scene.lamps.camera_visible()) {
-            let t_end = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-            let seen = beta * lamps_seen(scene, strategy, &ray, t_end, prev, medium, counters);
-            l += clamped(seen, arriving);
-        }
-        let Some(hit) = hit else {
-            l += clamped(beta * escaped(scene, strategy, ray.dir.normalize(), prev, counters), arriving);
-            break;
-        };
-        if medium != Rgb::ZERO {
-            beta *= transmittance(medium, hit.t * ray.dir.length());
-        }
-        let wo = -ray.dir.normalize();
-        if depth == 0 {
-            first_hit = Some(FirstHit::of(scene, &hit, wo));
-        }
-        l += clamped(emitted(scene, strategy, &hit, ray.dir, prev, beta, counters), arriving);
-        if depth == max_depth {
-            break;
-        }
-        let material = &scene.materials[hit.material as usize];
-        let Some(bsdf) = material.bsdf(hit.uv, &scene.images, ray.dir.dot(hit.n_geom) < 0.0) else { break };
-        let n_shading = material.mapped_normal(
-            hit.n_shading,
-            || scene.geometry.position_derivatives(hit.triangle),
-            hit.uv,
-            &scene.images,
-        );
-        let tangent = material.tangent(
-            n_shading,
-            || scene.geometry.tangent_at(hit.triangle, hit.p),
-            || scene.geometry.position_derivatives(hit.triangle),
-            hit.uv,
-            &scene.images,
-        );
-        let sp = ShadingPoint::new(bsdf, hit.n_geom, n_shading, tangent, wo);
+/// What traces a path: the scene, how it chooses lights and guides directions, how deep
+/// paths go and how contributions are clamped.
+#[derive(Clone, Copy)]
+pub struct Tracer<'a> {
+    /// The scene.
+    pub scene: &'a Scene,
+    /// The light strategy of next-event estimation.
+    pub strategy: &'a LightStrategy,
+    /// Path guiding's learned distributions, when the render guides.
+    pub guide: Option<&'a Guide>,
+    /// Most scattering events (1 = direct lighting only).
+    pub max_depth: u32,
+    /// Clamping of contributions.
+    pub clamp: Clamp,
+}
 
-        if !scene.lights.is_empty() {
-            let direct = beta * estimate_direct(scene, strategy, &sp, hit.p, medium, stream, depth, tally);
-            l += clamped(direct, clamp.limit(depth >= 1));
-        }
+impl Tracer<'_> {
+    /// Radiance arriving along `ray` (a camera ray).
+    pub fn radiance(&self, mut ray: Ray, stream: &SampleStream, tally: &mut Tally) -> PathSample {
+        let Tracer { scene, strategy, guide, max_depth, clamp } = *self;
+        let mut l = Rgb::ZERO;
+        let mut first_hit = None;
+        let mut beta = Rgb::ONE;
+        // The previous vertex, for MIS at emitter hits.
+        let mut prev: Option<Previous> = None;
+        // The absorption of the glass the ray travels through (zero outside any).
+        let mut medium = Rgb::ZERO;
+        // The vertices guiding learns from, while it learns.
+        let mut trail = tally.seen.guide_records().map(|_| Trail::default());
+        let mut depth = 0u32;
+        loop {
+            let counters = &mut tally.rays;
+            counters.rays += 1;
+            counters.time.closest_rays += counters.timing as u64;
+            let hit = timed(counters.timing, &mut counters.time.closest, || scene.intersect(&ray, f32::INFINITY));
+            // Light this ray brings is direct for the first two rays, then indirect (Cycles').
+            let arriving = clamp.limit(depth >= 2);
+            if !scene.lamps.is_empty() && (prev.is_some() || scene.lamps.camera_visible()) {
+                let t_end = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+                let seen = beta * lamps_seen(scene, strategy, &ray, t_end, prev, medium, counters);
+                l += clamped(seen, arriving);
+            }
+            let Some(hit) = hit else {
+                l += clamped(beta * escaped(scene, strategy, ray.dir.normalize(), prev, counters), arriving);
+                break;
+            };
+            if medium != Rgb::ZERO {
+                beta *= transmittance(medium, hit.t * ray.dir.length());
+            }
+            let wo = -ray.dir.normalize();
+            if depth == 0 {
+                first_hit = Some(FirstHit::of(scene, &hit, wo));
+            }
+            l += clamped(emitted(scene, strategy, &hit, ray.dir, prev, beta, counters), arriving);
+            if depth == max_depth {
+                break;
+            }
+            let material = &scene.materials[hit.material as usize];
+            let Some(bsdf) = material.bsdf(hit.uv, &scene.images, ray.dir.dot(hit.n_geom) < 0.0) else { break };
+            let n_shading = material.mapped_normal(
+                hit.n_shading,
+                || scene.geometry.position_derivatives(hit.triangle),
+                hit.uv,
+                &scene.images,
+            );
+            let tangent = material.tangent(
+                n_shading,
+                || scene.geometry.tangent_at(hit.triangle, hit.p),
+                || scene.geometry.position_derivatives(hit.triangle),
+                hit.uv,
+                &scene.images,
+            );
+            let sp = ShadingPoint::new(bsdf, hit.n_geom, n_shading, tangent, wo);
+            let scattering = Scattering::new(sp, hit.p, guide);
 
-        let u_lobe = if sp.chooses_lobes() { stream.get_1d(depth, Dim::BsdfLobe, 0) } else { 0.0 };
-        let u_dir = stream.get_2d(depth, Dim::BsdfDirection, 0);
-        let Some(bs) = sp.sample(u_lobe, u_dir) else { break };
-        beta *= bs.weight;
-        // Refracting into a solid glass object puts the ray in its volume; out of one, back
-        // outside (objects are not nested).
-        if bs.wi.dot(sp.n_geom) < 0.0 && !material.thin {
-            let entering = ray.dir.dot(hit.n_geom) < 0.0;
-            medium = if entering { material.absorption } else { Rgb::ZERO };
+            if !scene.lights.is_empty() {
+                let direct = beta * estimate_direct(scene, strategy, &scattering, hit.p, medium, stream, depth, tally);
+                l += clamped(direct, clamp.limit(depth >= 1));
+            }
+
+            let Some(bs) = scattering.sample(stream, depth) else { break };
+            beta *= bs.weight;
+            if let Some(t) = trail.as_mut().filter(|_| scattering.guidable()) {
+                t.push(hit.p, bs.wi, bs.pdf, beta, l);
+            }
+            // Refracting into a solid glass object puts the ray in its volume; out of one, back
+            // outside (objects are not nested).
+            if bs.wi.dot(sp.n_geom) < 0.0 && !material.thin {
+                let entering = ray.dir.dot(hit.n_geom) < 0.0;
+                medium = if entering { material.absorption } else { Rgb::ZERO };
+            }
+            prev = Some(Previous {
+                ctx: ShadingContext { p: hit.p, n: sp.selection_normal() },
+                bsdf_pdf: bs.pdf,
+                every_light: strategy.takes_every_light(sp.is_diffuse()),
+            });
+            ray = Ray::new(sp.ray_origin(hit.p, bs.wi), bs.wi);
+            depth += 1;
+            if !survives_roulette(stream, depth, &mut beta) {
+                break;
+            }
         }
-        prev = Some(Previous {
-            ctx: ShadingContext { p: hit.p, n: sp.selection_normal() },
-            bsdf_pdf: bs.pdf,
-            every_light: strategy.takes_every_light(sp.is_diffuse()),
-        });
-        ray = Ray::new(sp.ray_origin(hit.p, bs.wi), bs.wi);
-        depth += 1;
-        if !survives_roulette(stream, depth, &mut beta) {
-            break;
+        debug_assert!(l.is_finite(), "non-finite radiance {l}");
+        if let Some(t) = &trail {
+            t.close(l, tally);
         }
+        PathSample { radiance: l, first_hit }
     }
-    debug_assert!(l.is_finite(), "non-finite radiance {l}");
-    PathSample { radiance: l, first_hit }
 }

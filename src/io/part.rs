@@ -44,6 +44,9 @@ pub struct PartHeader {
     /// Sample clamping (off in parts written before myriad had it).
     #[serde(default)]
     pub clamp: Clamp,
+    /// Path guiding (off in parts written before myriad had it).
+    #[serde(default)]
+    pub guiding: bool,
     /// Image size.
     pub resolution: [u32; 2],
     /// AOV names kept (albedo, normal, depth, variance).

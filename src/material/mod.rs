@@ -118,6 +118,15 @@ impl BsdfAt {
         matches!(self, BsdfAt::Diffuse(..))
     }
 
+    /// The mean roughness of what it samples (see [`PrincipledAt::mean_roughness`]).
+    #[inline]
+    pub fn mean_roughness(&self) -> f32 {
+        match self {
+            BsdfAt::Diffuse(..) => 1.0,
+            BsdfAt::Principled(b) => b.mean_roughness(),
+        }
+    }
+
     /// Whether [`sample`](Self::sample) reads its `u_lobe` (Lambert's one lobe does not).
     #[inline]
     pub fn chooses_lobes(&self) -> bool {
@@ -483,6 +492,12 @@ impl ShadingPoint {
     #[inline]
     pub fn chooses_lobes(&self) -> bool {
         self.bsdf.chooses_lobes()
+    }
+
+    /// The mean roughness of what its BSDF samples (see [`BsdfAt::mean_roughness`]).
+    #[inline]
+    pub fn mean_roughness(&self) -> f32 {
+        self.bsdf.mean_roughness()
     }
 
     /// Whether its BSDF is Lambert's (see [`BsdfAt::is_diffuse`]).

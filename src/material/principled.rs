@@ -439,6 +439,18 @@ impl PrincipledAt {
         m.eval_view(&self.view, wo, wi)
     }
 
+    /// The perceptual roughness of the lobes it samples, averaged with the probability it
+    /// samples each (Lambert's and the sheen's count as 1): how much a learned directional
+    /// distribution can stand in for its sampling (Cycles' guiding probability is
+    /// proportional to it).
+    #[inline]
+    pub fn mean_roughness(&self) -> f32 {
+        let (m, v) = (&self.model, &self.view);
+        let diffuse = (1.0 - v.p_sheen - v.p_coat - v.p_glossy - v.p_glass).max(0.0);
+        let coat = m.coat.map_or(0.0, |c| c.roughness);
+        diffuse + v.p_sheen + v.p_coat * coat + (v.p_glossy + v.p_glass) * m.roughness
+    }
+
     /// Solid-angle density of [`PrincipledAt::sample`] at `wi`.
     #[inline]
     pub fn pdf(&self, wi: Vec3A) -> f32 {

@@ -25,6 +25,10 @@ pub enum Dim {
     RussianRoulette = 8,
     /// Point on the camera's lens aperture (2D; bounce 0 only, with depth of field).
     Lens = 9,
+    /// Whether path guiding or the BSDF draws the direction.
+    GuideChoice = 10,
+    /// Direction drawn from the guide's distribution (2D).
+    GuideDirection = 11,
 }
 
 impl Dim {

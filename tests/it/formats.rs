@@ -3,7 +3,7 @@
 //! broken files are clear errors naming the file and the element.
 
 use crate::common::{assert_mentions, blender, cornell, cornell_json, load, load_error, load_report};
-use crate::render::{compare_films, render_with};
+use crate::render::{compare_films, render_guided, render_with};
 use myriad::commands::LoadedScene;
 use myriad::math::{Rgb, UVec2};
 use myriad::scene::{AUTO_CAMERA, Scene};
@@ -413,9 +413,11 @@ fn lamps_inside_glass_render_as_cycles_without_its_light_sampling_bias() {
     // rays alone: Cycles' own light sampling overestimates a lamp inside rough glass (2.3 % at
     // 0.45, 9.7 % at 0.8; docs/materials.md), which would fail this test. Caustics are too
     // heavy-tailed for a variance estimated from one render's samples, so the noise of each
-    // 4 × 4-pixel region is measured as the spread of its mean over four seeds.
+    // 4 × 4-pixel region is measured as the spread of its mean over four seeds. Guided paths
+    // must give the same picture: two of them again with path guiding on.
     const SEEDS: u64 = 4;
-    for name in ["bulb_clear", "bulb_frosted_02", "bulb_frosted_045", "bulb_frosted_08", "bulb_shell"] {
+    let unguided = ["bulb_clear", "bulb_frosted_02", "bulb_frosted_045", "bulb_frosted_08", "bulb_shell"].map(|n| (n, false));
+    for (name, guiding) in unguided.into_iter().chain([("bulb_clear", true), ("bulb_frosted_045", true)]) {
         let reference = blender(&format!("factors/{name}.cycles.exr"));
         let (size, cycles) = cycles_downsampled(&reference, 4);
         let scene = load(&blender(&format!("factors/{name}.glb")), Some(size), None).unwrap();
@@ -424,7 +426,7 @@ fn lamps_inside_glass_render_as_cycles_without_its_light_sampling_bias() {
         // Per seed, per region: the mean of its pixels (RGB).
         let runs: Vec<Vec<Rgb>> = (0..SEEDS)
             .map(|seed| {
-                let film = render_with(&scene, LightSamplerKind::Tree, 1024, 9, 5 + seed);
+                let film = render_guided(&scene, LightSamplerKind::Tree, 1024, 9, 5 + seed, guiding);
                 let mut sums = vec![Rgb::ZERO; rw * rh];
                 (0..cycles.len()).for_each(|i| sums[region(i)] += film.mean(i) / 16.0);
                 sums
@@ -448,6 +450,7 @@ fn lamps_inside_glass_render_as_cycles_without_its_light_sampling_bias() {
         let n = (3 * rw * rh) as f64;
         let ours = runs.iter().flatten().fold(Rgb::ZERO, |a, &v| a + v);
         let ratio = ours / (theirs.iter().fold(Rgb::ZERO, |a, &v| a + v) * SEEDS as f32);
+        let name = if guiding { format!("{name} (guided)") } else { name.to_string() };
         eprintln!("{name}: image mean {ratio} of Cycles'; regions: mean z² {:.2}, worst {worst:.1}", z2 / n);
         assert!((ratio - Rgb::ONE).abs().max_element() < 0.01, "{name}: image mean {ratio} of Cycles'");
         // A t statistic over 3 degrees of freedom has variance 3: its square averages 3.

@@ -10,6 +10,7 @@ mod display;
 mod docs;
 mod environment;
 mod formats;
+mod guiding;
 mod gltf_accessors;
 mod gltf_variants;
 mod lamps;

@@ -361,6 +361,7 @@ fn exercise(path: &Path) -> myriad::Result<()> {
             seed: 1,
             max_depth: 3,
             clamp: Clamp::OFF,
+            guiding: false,
             resolution,
             aovs: Default::default(),
         };

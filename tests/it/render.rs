@@ -16,6 +16,11 @@ use myriad::settings::{Clamp, LightSamplerKind};
 pub const ALL_KINDS: [LightSamplerKind; 7] = LightSamplerKind::EVERY;
 
 pub fn render_with(scene: &TestScene, kind: LightSamplerKind, spp: u32, max_depth: u32, seed: u64) -> Film {
+    render_guided(scene, kind, spp, max_depth, seed, false)
+}
+
+/// [`render_with`], with path guiding on or off.
+pub fn render_guided(scene: &TestScene, kind: LightSamplerKind, spp: u32, max_depth: u32, seed: u64, guiding: bool) -> Film {
     let strategy = LightStrategy::build(kind, &scene.lights, scene.center, scene.radius);
     let resolution = scene.resolution;
     let settings = RenderSettings {
@@ -23,6 +28,7 @@ pub fn render_with(scene: &TestScene, kind: LightSamplerKind, spp: u32, max_dept
         seed,
         max_depth,
         clamp: Clamp::OFF,
+        guiding,
         resolution,
         aovs: Default::default(),
     };
@@ -271,12 +277,14 @@ pub fn compare_films(a: &Film, b: &Film, alpha: f64, label: &str) {
 fn same_seed_gives_identical_pixels_for_any_thread_count() {
     // `learned` too: what it learns between passes must not depend on the threads either;
     // and `cells`, whose tables whichever thread comes first builds.
+    // Path guiding, which learns between passes as well.
     for kind in [LightSamplerKind::Power, LightSamplerKind::Learned, LightSamplerKind::Cells] {
-        identical_for_any_thread_count(kind);
+        identical_for_any_thread_count(kind, false);
     }
+    identical_for_any_thread_count(LightSamplerKind::Tree, true);
 }
 
-fn identical_for_any_thread_count(kind: LightSamplerKind) {
+fn identical_for_any_thread_count(kind: LightSamplerKind, guiding: bool) {
     let opts = BuildOptions { resolution: Some(UVec2::new(24, 18)), camera: None, ..Default::default() };
     let films: Vec<Film> = [1usize, 2, 3]
         .iter()
@@ -284,7 +292,7 @@ fn identical_for_any_thread_count(kind: LightSamplerKind) {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             pool.install(|| {
                 let scene = TestScene::from(load_scene(None, &opts.clone().into()).unwrap());
-                render_with(&scene, kind, 8, 8, 42)
+                render_guided(&scene, kind, 20, 8, 42, guiding)
             })
         })
         .collect();
@@ -319,6 +327,7 @@ fn pass_boundaries_do_not_change_pixels() {
         seed: 9,
         max_depth: 4,
         clamp: Clamp::OFF,
+        guiding: false,
         resolution,
         aovs: Default::default(),
     };
@@ -351,6 +360,7 @@ fn a_progressive_render_in_passes_of_its_own_is_the_render_and_a_called_off_pass
         seed: 4,
         max_depth: 3,
         clamp: Clamp::OFF,
+        guiding: false,
         resolution,
         aovs: Default::default(),
     };
@@ -384,6 +394,7 @@ fn the_image_size_is_a_render_setting_not_part_of_the_scene() {
         seed: 3,
         max_depth: 4,
         clamp: Clamp::OFF,
+        guiding: false,
         resolution,
         aovs: Default::default(),
     };

@@ -53,20 +53,22 @@ fn parts_merge_to_the_one_machine_image_bit_for_bit() {
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/offices.ron");
     let scene = scene.to_str().unwrap();
     let common = ["--resolution", "24x18", "--max-depth", "4", "--aov", "albedo,depth,variance"];
-    for sampler in ["tree", "learned"] {
-        let full = format!("{sampler}-full.exr");
+    // Path guiding learns between passes too, and must split as `learned` does.
+    for (sampler, guiding) in [("tree", "off"), ("learned", "off"), ("tree", "on")] {
+        let common = [&common[..], &["--guiding", guiding]].concat();
+        let full = format!("{sampler}-{guiding}-full.exr");
         ok(&[&["render", scene, "--spp", "20", "--sampler", sampler, "-o", &full][..], &common].concat(), d);
         // Ranges cut across the learning boundaries (1, 2, 4, 8, 16), given in any order.
         let ranges = ["13..20", "0..3", "3..13"];
         let mut parts = Vec::new();
         for r in ranges {
-            let part = format!("{sampler}-{}.part", r.replace("..", "-"));
+            let part = format!("{sampler}-{guiding}-{}.part", r.replace("..", "-"));
             let said =
                 ok(&[&["render", scene, "--samples", r, "--sampler", sampler, "-o", &part][..], &common].concat(), d);
             assert!(said.contains(&part), "{said}");
             parts.push(part);
         }
-        let merged = format!("{sampler}-merged.exr");
+        let merged = format!("{sampler}-{guiding}-merged.exr");
         let said =
             ok(&[&["merge"][..], &parts.iter().map(String::as_str).collect::<Vec<_>>(), &["-o", &merged]].concat(), d);
         assert!(said.contains("3 parts") && said.contains("20 spp"), "{said}");
@@ -87,8 +89,10 @@ fn parts_that_do_not_belong_together_are_refused_by_name() {
     render("1..3", &[], "overlap.part");
     render("5..6", &[], "late.part");
     render("2..4", &["--clamp", "3"], "clamp.part");
+    render("2..4", &["--guiding", "on"], "guided.part");
     fails(&["merge", "a.part", "seed.part", "-o", "x.exr"], d, &["seed.part", "does not belong", "seed 9"]);
     fails(&["merge", "a.part", "clamp.part", "-o", "x.exr"], d, &["clamp.part", "does not belong", "clamp 0,3"]);
+    fails(&["merge", "a.part", "guided.part", "-o", "x.exr"], d, &["guided.part", "does not belong", "guiding on"]);
     fails(&["merge", "a.part", "overlap.part", "-o", "x.exr"], d, &["overlap.part", "1..3", "overlap"]);
     fails(&["merge", "a.part", "b.part", "late.part", "-o", "x.exr"], d, &["4..5", "--allow-gaps"]);
     std::fs::write(d.join("cut.part"), &std::fs::read(d.join("a.part")).unwrap()[..200]).unwrap();

@@ -89,6 +89,8 @@ pub(crate) struct Plan {
     /// The runs' sample clamping (the reference is never clamped: the bias check then shows
     /// what clamping costs).
     pub(crate) clamp: Clamp,
+    /// Whether the runs are guided.
+    pub(crate) guiding: bool,
     pub(crate) resolution: UVec2,
     pub(crate) seeds: Vec<u64>,
     /// The ray tracer the scene was built for, for the provenance.
@@ -98,7 +100,7 @@ pub(crate) struct Plan {
 impl Plan {
     /// The command line's choices over the scene's, over the defaults.
     pub(crate) fn new(opts: &CompareOptions, report: &SceneReport) -> Result<Self> {
-        let Resolved { budget, seed, max_depth, clamp, .. } =
+        let Resolved { budget, seed, max_depth, clamp, guiding, .. } =
             opts.settings.resolve(&report.render, COMPARE_DEFAULT_SPP)?;
         let samplers = opts.samplers.clone().unwrap_or_else(|| {
             let mut samplers = DEFAULT_SAMPLERS.to_vec();
@@ -112,12 +114,12 @@ impl Plan {
         crate::limits::check_runs(samplers.len() as u64 * opts.seeds as u64, what).map_err(Error::Usage)?;
         let seeds = (1..=opts.seeds as u64).map(|k| seed.wrapping_add(k)).collect();
         let tracer = report.stats.tracer;
-        Ok(Self { samplers, budget, max_depth, clamp, resolution: report.resolution, seeds, tracer })
+        Ok(Self { samplers, budget, max_depth, clamp, guiding, resolution: report.resolution, seeds, tracer })
     }
 
     pub(crate) fn settings(&self, seed: u64) -> RenderSettings {
-        let (budget, max_depth, clamp, resolution) = (self.budget, self.max_depth, self.clamp, self.resolution);
-        RenderSettings { budget, seed, max_depth, clamp, resolution, aovs: AovSet::default() }
+        let Plan { budget, max_depth, clamp, guiding, resolution, .. } = *self;
+        RenderSettings { budget, seed, max_depth, clamp, guiding, resolution, aovs: AovSet::default() }
     }
 
     /// The bias flag's level for one sampler: [`BIAS_ALPHA`] over all of them (Šidák).

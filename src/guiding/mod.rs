@@ -1,0 +1,285 @@
+//! Path guiding: where light came from, learned from the render's own paths, so that paths
+//! are sent there more often (Müller, Gross, Novák 2017, *Practical Path Guiding*).
+//!
+//! Owns: [`Guide`], what paths sample from (space cut into regions by a k-d tree of
+//! midpoint splits, a learned [`Directions`] per region), [`Records`], what paths record
+//! into (the next cut, with a fixed-point light sum per leaf quadrant and a sample count per
+//! region, added atomically: integer sums, so neither the thread count nor the order of the
+//! records changes a bit), and [`Guiding`], the state that turns one iteration's records
+//! into the next [`Guide`] and the next cut. An iteration is a learning pass of
+//! [`crate::learning`] (samples 0..1, 1..2, 2..4, … up to its last power of two); the
+//! distributions a pass samples from are a function of the samples before it alone.
+//!
+//! A record is the light a path's remainder brought back through a vertex, luminance over
+//! the density of the direction it left by: summed per quadrant, an estimate of the light
+//! arriving through it (Müller et al.'s estimator). A region whose iteration saw more than
+//! [`SPLIT_SAMPLES`]·√(spp of the iteration) records is halved for the next (along x, y, z
+//! in turn, copies of its cut each), and each quadtree is re-cut by the light it saw
+//! ([`Quadtree::refined`]); the number of quadtree nodes is capped at [`MAX_NODES`].
+
+mod directions;
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+pub use directions::{Directions, Quadtree, from_square, to_square};
+
+use crate::math::{Fixed, Vec3A};
+
+/// Records a region may take in an iteration of one sample per pixel before it is halved
+/// (Müller et al.'s c, which grows with √spp).
+pub const SPLIT_SAMPLES: f64 = 4000.0;
+/// Most quadtree nodes over all regions: 32 bytes of records and 32 of distribution each.
+pub const MAX_NODES: usize = 1 << 18;
+/// Fractional bits of a recorded value.
+const RECORD_BITS: i32 = 20;
+/// Largest value a record keeps (a firefly's weight in what is learned is capped; the image
+/// is not touched).
+const RECORD_LIMIT: f64 = (1u64 << 23) as f64;
+/// An entry of [`Regions`] that is a region's index rather than a node's.
+const LEAF: u32 = 1 << 31;
+
+/// The scene's space as the unit cube: the cube around its bounding sphere.
+#[derive(Clone, Copy, Debug)]
+struct Space {
+    min: Vec3A,
+    scale: f32,
+}
+
+impl Space {
+    fn new(center: Vec3A, radius: f32) -> Self {
+        let radius = radius.max(1e-6);
+        Self { min: center - Vec3A::splat(radius), scale: 0.5 / radius }
+    }
+
+    /// Where `p` lies in the unit cube (clamped into it).
+    #[inline]
+    fn unit(&self, p: Vec3A) -> Vec3A {
+        ((p - self.min) * self.scale).clamp(Vec3A::ZERO, Vec3A::splat(1.0 - f32::EPSILON))
+    }
+}
+
+/// Space cut into regions: a k-d tree whose level `d` halves its cell along axis `d mod 3`.
+/// An entry with [`LEAF`] set is a region's index, otherwise a node's.
+#[derive(Clone, Debug)]
+struct Regions {
+    root: u32,
+    nodes: Vec<[u32; 2]>,
+    count: usize,
+}
+
+impl Regions {
+    fn whole() -> Self {
+        Self { root: LEAF, nodes: Vec::new(), count: 1 }
+    }
+
+    /// The region holding the unit-cube point `u`.
+    #[inline]
+    fn locate(&self, mut u: Vec3A) -> usize {
+        let (mut entry, mut axis) = (self.root, 0);
+        while entry & LEAF == 0 {
+            let upper = u[axis] >= 0.5;
+            u[axis] = 2.0 * u[axis] - upper as u32 as f32;
+            entry = self.nodes[entry as usize][upper as usize];
+            axis = (axis + 1) % 3;
+        }
+        (entry & !LEAF) as usize
+    }
+
+    /// The cut with region `r` halved `halvings(r)` times over (2^k regions in its place);
+    /// and for each new region, the old one it lies in.
+    fn split(&self, halvings: impl Fn(usize) -> u32) -> (Regions, Vec<usize>) {
+        let mut out = Regions { root: 0, nodes: Vec::new(), count: 0 };
+        let mut origin = Vec::new();
+        out.root = out.copy(self, self.root, &halvings, &mut origin);
+        (out, origin)
+    }
+
+    fn copy(&mut self, old: &Regions, entry: u32, halvings: &impl Fn(usize) -> u32, origin: &mut Vec<usize>) -> u32 {
+        if entry & LEAF != 0 {
+            let r = (entry & !LEAF) as usize;
+            return self.halve(r, halvings(r), origin);
+        }
+        let [a, b] = old.nodes[entry as usize];
+        let node = self.nodes.len();
+        self.nodes.push([0; 2]);
+        let a = self.copy(old, a, halvings, origin);
+        let b = self.copy(old, b, halvings, origin);
+        self.nodes[node] = [a, b];
+        node as u32
+    }
+
+    fn halve(&mut self, r: usize, times: u32, origin: &mut Vec<usize>) -> u32 {
+        if times == 0 {
+            origin.push(r);
+            self.count += 1;
+            return LEAF | (self.count - 1) as u32;
+        }
+        let node = self.nodes.len();
+        self.nodes.push([0; 2]);
+        let a = self.halve(r, times - 1, origin);
+        let b = self.halve(r, times - 1, origin);
+        self.nodes[node] = [a, b];
+        node as u32
+    }
+}
+
+/// What paths sample directions from: a learned distribution per region of space (none
+/// where nothing was learned there).
+#[derive(Clone, Debug)]
+pub struct Guide {
+    space: Space,
+    regions: Regions,
+    directions: Vec<Option<Directions>>,
+}
+
+impl Guide {
+    /// The distribution learned for the region holding `p`.
+    #[inline]
+    pub fn at(&self, p: Vec3A) -> Option<&Directions> {
+        self.directions[self.regions.locate(self.space.unit(p))].as_ref()
+    }
+}
+
+/// What paths record into during an iteration (shared by every worker).
+#[derive(Debug)]
+pub struct Records {
+    space: Space,
+    regions: Regions,
+    trees: Vec<Quadtree>,
+    /// Where each region's leaf quadrants start in `light`.
+    offsets: Vec<usize>,
+    /// Light per leaf quadrant, fixed point with [`RECORD_BITS`] fractional bits.
+    light: Vec<AtomicU64>,
+    /// Records per region.
+    counts: Vec<AtomicU64>,
+}
+
+impl Records {
+    fn new(space: Space, regions: Regions, trees: Vec<Quadtree>) -> Self {
+        let offsets: Vec<usize> =
+            trees.iter().scan(0, |start, t| Some(std::mem::replace(start, *start + 4 * t.nodes()))).collect();
+        let quadrants = trees.iter().map(|t| 4 * t.nodes()).sum();
+        let light = (0..quadrants).map(|_| AtomicU64::new(0)).collect();
+        let counts = (0..trees.len()).map(|_| AtomicU64::new(0)).collect();
+        Self { space, regions, trees, offsets, light, counts }
+    }
+
+    /// Records that light of luminance `value` (over the density it was sampled with)
+    /// arrived at `p` from direction `wi`.
+    #[inline]
+    pub fn record(&self, p: Vec3A, wi: Vec3A, value: f32) {
+        let r = self.regions.locate(self.space.unit(p));
+        self.counts[r].fetch_add(1, Ordering::Relaxed);
+        let q = Fixed::of(value as f64, RECORD_BITS, RECORD_LIMIT).max(0) as u64;
+        if q > 0 {
+            let leaf = self.trees[r].leaf(to_square(wi));
+            self.light[self.offsets[r] + leaf].fetch_add(q, Ordering::Relaxed);
+        }
+    }
+
+    /// Region `r`'s light per quadrant of each of its nodes.
+    fn sums(&self, r: usize) -> Vec<[u64; 4]> {
+        let tree = &self.trees[r];
+        let leaves: Vec<u64> =
+            self.light[self.offsets[r]..][..4 * tree.nodes()].iter().map(|a| a.load(Ordering::Relaxed)).collect();
+        tree.sums(&leaves)
+    }
+
+    /// Bytes it holds.
+    fn bytes(&self) -> usize {
+        let nodes: usize = self.trees.iter().map(Quadtree::nodes).sum();
+        nodes * (16 + 32) + self.counts.len() * 8 + self.regions.nodes.len() * 8
+    }
+}
+
+/// What guiding has learned, for the summary, `info` and `compare`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GuideStats {
+    /// Regions of space with a learned distribution.
+    pub regions: usize,
+    /// Quadtree nodes over them.
+    pub nodes: usize,
+    /// Records learned from.
+    pub records: u64,
+    /// Bytes of the guide and its records.
+    pub memory_bytes: usize,
+    /// Time spent learning (between passes).
+    pub learning_time: Duration,
+}
+
+/// The guiding state of a render: the guide paths sample from now, the records of the
+/// iteration under way.
+#[derive(Debug)]
+pub struct Guiding {
+    guide: Guide,
+    records: Arc<Records>,
+    stats: GuideStats,
+}
+
+impl Guiding {
+    /// Nothing learned yet, for a scene within the sphere (`center`, `radius`).
+    pub fn new(center: Vec3A, radius: f32) -> Self {
+        let space = Space::new(center, radius);
+        let guide = Guide { space, regions: Regions::whole(), directions: vec![None] };
+        let records = Arc::new(Records::new(space, Regions::whole(), vec![Quadtree::default()]));
+        Self { guide, records, stats: GuideStats::default() }
+    }
+
+    /// What paths sample from now.
+    pub fn guide(&self) -> &Guide {
+        &self.guide
+    }
+
+    /// What paths record into now.
+    pub fn records(&self) -> Arc<Records> {
+        Arc::clone(&self.records)
+    }
+
+    /// Ends an iteration of `spp` samples per pixel: its records become the guide, and the
+    /// next iteration records into a cut refined by them.
+    pub fn learn(&mut self, spp: u32) {
+        let start = Instant::now();
+        let old = &self.records;
+        let sums: Vec<Vec<[u64; 4]>> = (0..old.trees.len()).map(|r| old.sums(r)).collect();
+        let counts: Vec<u64> = old.counts.iter().map(|c| c.load(Ordering::Relaxed)).collect();
+        let directions: Vec<Option<Directions>> =
+            old.trees.iter().zip(&sums).map(|(t, s)| Directions::new(t, s)).collect();
+        let refined: Vec<Quadtree> = old.trees.iter().zip(&sums).map(|(t, s)| t.refined(s)).collect();
+        // Halve where an iteration's records passed the threshold, while the nodes fit.
+        let threshold = SPLIT_SAMPLES * (spp.max(1) as f64).sqrt();
+        let mut room = MAX_NODES.saturating_sub(refined.iter().map(Quadtree::nodes).sum());
+        let halvings: Vec<u32> = refined
+            .iter()
+            .zip(&counts)
+            .map(|(tree, &n)| {
+                let mut k = 0;
+                // Going from 2^k copies of the tree to 2^(k+1) adds 2^k.
+                while n as f64 / (1u64 << k) as f64 > threshold && tree.nodes() << k <= room {
+                    room -= tree.nodes() << k;
+                    k += 1;
+                }
+                k
+            })
+            .collect();
+        let (regions, origin) = old.regions.split(|r| halvings[r]);
+        let trees = origin.iter().map(|&o| refined[o].clone()).collect();
+        let space = old.space;
+        self.guide = Guide { space, regions: old.regions.clone(), directions };
+        self.records = Arc::new(Records::new(space, regions, trees));
+        let learned = self.guide.directions.iter().flatten();
+        self.stats = GuideStats {
+            regions: learned.clone().count(),
+            nodes: learned.clone().map(Directions::nodes).sum(),
+            records: self.stats.records + counts.iter().sum::<u64>(),
+            memory_bytes: learned.map(Directions::bytes).sum::<usize>() + self.records.bytes(),
+            learning_time: self.stats.learning_time + start.elapsed(),
+        };
+    }
+
+    /// What it has learned so far.
+    pub fn stats(&self) -> GuideStats {
+        self.stats
+    }
+}
