@@ -34,6 +34,7 @@ fn bench(c: &mut Criterion) {
                 seed: 0,
                 max_depth: 8,
                 clamp: Clamp::OFF,
+                guiding: false,
                 resolution,
                 aovs: Default::default(),
             };

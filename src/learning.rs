@@ -7,7 +7,8 @@
 //! at the next power of two of spp, and the state learns there from everything recorded
 //! since. What is learned is therefore a function of the samples alone, not of the thread
 //! count or how passes split them; a render of a sample range `a..b` needs the state at `a`,
-//! which [`Learning`]'s owner makes by rendering samples `0..min(a, LEARN_UNTIL)` first.
+//! which [`Learning`]'s owner makes by rendering samples `0..min(a, until)` first. The light
+//! sampler learns up to [`LEARN_UNTIL`] spp, path guiding up to [`GUIDE_UNTIL`].
 //!
 //! The integrator writes into a [`Seen`] through its `record_*` methods; the render loop
 //! asks [`Learning`] how long a pass may be, hands it each pass's [`Seen`], and renders
@@ -16,10 +17,11 @@
 
 use std::sync::Arc;
 
+pub use crate::guiding::GUIDE_UNTIL;
 use crate::guiding::{Guide, GuideStats, Guiding, Records};
 use crate::light::LightId;
-use crate::math::Vec3A;
 use crate::light_sampler::{LearnedStats, LightStrategy, Observations, ShadingContext};
+use crate::math::Vec3A;
 
 pub use crate::light_sampler::LEARN_UNTIL;
 
@@ -115,30 +117,38 @@ impl Learning {
         self.guiding.as_ref().map(Guiding::guide)
     }
 
+    /// The samples per pixel after which nothing more is learned: a render of samples
+    /// `a..b` needs the state at `min(a, until)`.
+    pub fn until(&self) -> u32 {
+        let light = if self.strategy.is_some() { LEARN_UNTIL } else { 0 };
+        let guide = if self.guiding.is_some() { GUIDE_UNTIL } else { 0 };
+        light.max(guide)
+    }
+
     /// For a pass starting at sample `first`: the most samples it may take and what its
     /// paths record into, when it must record (it then ends at the next power of two, where
     /// the state learns); `None` once learning is over.
     pub fn recording(&self, first: u32) -> Option<(u32, Seen)> {
-        (first < LEARN_UNTIL).then(|| {
+        (first < self.until()).then(|| {
             let limit = (first + 1).next_power_of_two() - first;
             let seen = Seen {
-                light: self.strategy.as_ref().map(|_| Observations::default()),
-                guide: self.guiding.as_ref().map(Guiding::records),
+                light: self.strategy.as_ref().filter(|_| first < LEARN_UNTIL).map(|_| Observations::default()),
+                guide: self.guiding.as_ref().filter(|_| first < GUIDE_UNTIL).map(Guiding::records),
             };
             (limit, seen)
         })
     }
 
     /// Takes what a pass ending at sample `end` recorded; learns from everything since the
-    /// last time when `end` is a power of two within [`LEARN_UNTIL`].
+    /// last time when `end` is a power of two within [`until`](Self::until).
     pub fn after_pass(&mut self, seen: Seen, end: u32) {
         self.pending = std::mem::take(&mut self.pending).merge(seen);
-        if end.is_power_of_two() && end <= LEARN_UNTIL {
+        if end.is_power_of_two() && end <= self.until() {
             let Seen { light, guide: _ } = std::mem::take(&mut self.pending);
             if let (Some(strategy), Some(light)) = (self.strategy.as_mut(), light) {
                 strategy.learn(light);
             }
-            if let Some(g) = self.guiding.as_mut() {
+            if let Some(g) = self.guiding.as_mut().filter(|_| end <= GUIDE_UNTIL) {
                 g.learn(end - self.learned_at);
             }
             self.learned_at = end;

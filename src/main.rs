@@ -263,7 +263,7 @@ impl SlurmArgs {
         flag("seed", self.seed.filter(|_| single).map(|s| s.to_string()));
         flag("max-depth", self.max_depth.map(|d| d.to_string()));
         flag("clamp", self.clamp.map(|c| format!("{},{}", c.direct, c.indirect)));
-        flag("guiding", self.guiding.map(|g| if g { "on" } else { "off" }.to_string()));
+        flag("guiding", self.guiding.map(|g| myriad::settings::on_off(g).to_string()));
         flag("resolution", self.resolution.map(|r| format!("{}x{}", r.x, r.y)));
         flag("camera", self.camera.clone());
         flag("aov", (!self.aov.is_empty()).then(|| self.aov.join(",")));

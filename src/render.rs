@@ -14,10 +14,10 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use crate::film::{AovSet, Film};
+use crate::guiding::{Guide, GuideStats};
 use crate::integrator::{RayCounters, Tally, path, timing};
 use crate::interrupt::{self, Stop};
-use crate::guiding::{Guide, GuideStats};
-use crate::learning::{LEARN_UNTIL, Learning, Seen};
+use crate::learning::{Learning, Seen};
 use crate::light_sampler::{LearnedStats, LightStrategy};
 use crate::math::UVec2;
 use crate::sampling::{Dim, SampleStream};
@@ -334,7 +334,14 @@ fn train(
         let first = film.spp();
         let (limit, recording) = learning.recording(first).expect("training stays within the learning");
         let count = limit.min(end - first);
-        let pass = Pass { scene, strategy: learning.strategy().unwrap_or(strategy), guide: learning.guide(), settings, first, count };
+        let pass = Pass {
+            scene,
+            strategy: learning.strategy().unwrap_or(strategy),
+            guide: learning.guide(),
+            settings,
+            first,
+            count,
+        };
         let tally = render_pass(&pass, &mut film, &recording, Watch::default());
         rays.add(&tally.rays);
         learning.after_pass(tally.seen, first + count);
@@ -347,7 +354,7 @@ fn train(
 /// when the view changes.
 ///
 /// A strategy that learns starts from nothing here and learns between passes, at every
-/// power of two of spp up to [`LEARN_UNTIL`]: [`Progressive::pass`] ends passes there, so
+/// power of two of spp up to [`Learning::until`]: [`Progressive::pass`] ends passes there, so
 /// what it learns depends on the samples, not on how passes split them.
 pub struct Progressive<'a> {
     scene: &'a Scene,
@@ -370,7 +377,8 @@ impl<'a> Progressive<'a> {
         let mut learning = Learning::new(strategy, guide);
         let mut rays = RayCounters::default();
         if let Some(l) = learning.as_mut().filter(|_| offset > 0) {
-            rays.add(&train(l, scene, strategy, settings, offset.min(LEARN_UNTIL)));
+            let end = offset.min(l.until());
+            rays.add(&train(l, scene, strategy, settings, end));
         }
         let film = Film::new(settings.resolution, settings.aovs.wants_first_hit());
         Self { scene, strategy, settings: *settings, film, learning, offset, rays, non_finite: 0 }

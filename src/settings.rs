@@ -141,6 +141,11 @@ impl FromStr for Clamp {
     }
 }
 
+/// A switch's name as options and headers write it: `on` or `off`.
+pub fn on_off(on: bool) -> &'static str {
+    if on { "on" } else { "off" }
+}
+
 /// Render settings a scene file may carry (its `render: (...)` block); `None` leaves the
 /// choice to the command line, then to myriad's default. Zeros are refused by the loader.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]

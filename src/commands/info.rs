@@ -112,6 +112,14 @@ impl fmt::Display for InfoReport {
                 human_bytes(l.max_bytes as u64)
             )?;
         }
+        writeln!(
+            f,
+            "guiding      {} (--guiding): learns until {} spp, regions halved past {} records per √spp, at most {}",
+            crate::settings::on_off(r.render.guiding.unwrap_or(crate::commands::settings::DEFAULT_GUIDING)),
+            crate::guiding::GUIDE_UNTIL,
+            crate::guiding::SPLIT_SAMPLES,
+            human_bytes(crate::guiding::MAX_BYTES as u64)
+        )?;
         for (name, what) in &r.extensions {
             writeln!(f, "extension    {name}: {what}")?;
         }

@@ -14,6 +14,7 @@ use crate::error::{Error, Result};
 use crate::film::Film;
 use crate::io::part::{self, PartHeader};
 use crate::limits::check_memory;
+use crate::settings::on_off;
 
 /// What to merge.
 #[derive(Clone, Debug)]
@@ -130,10 +131,6 @@ fn check_ranges(parts: &[(PathBuf, PartHeader)], allow_gaps: bool) -> Result<(Ra
     Ok((ranges, gaps))
 }
 
-fn on_off(b: bool) -> String {
-    if b { "on" } else { "off" }.to_string()
-}
-
 /// What differs between two parts' identities, for the message.
 fn difference(a: &PartHeader, b: &PartHeader) -> String {
     let fields = [
@@ -144,7 +141,7 @@ fn difference(a: &PartHeader, b: &PartHeader) -> String {
         ("seed", a.seed.to_string(), b.seed.to_string()),
         ("max depth", a.max_depth.to_string(), b.max_depth.to_string()),
         ("clamp", a.clamp.to_string(), b.clamp.to_string()),
-        ("guiding", on_off(a.guiding), on_off(b.guiding)),
+        ("guiding", on_off(a.guiding).into(), on_off(b.guiding).into()),
         ("resolution", format!("{:?}", a.resolution), format!("{:?}", b.resolution)),
         ("AOVs", a.aovs.join(","), b.aovs.join(",")),
     ];
@@ -156,8 +153,16 @@ fn difference(a: &PartHeader, b: &PartHeader) -> String {
 /// Writes the merged image (EXR with the provenance a render writes, and the preview).
 fn write_merged(opts: &MergeOptions, header: &PartHeader, film: &Film, png: Option<PathBuf>) -> Result<Vec<PathBuf>> {
     let h = header;
-    let mut meta =
-        super::provenance::image_provenance(&h.scene, &h.sampler, &h.tracer, film.spp(), h.seed, h.max_depth, h.clamp, h.guiding);
+    let mut meta = super::provenance::image_provenance(
+        &h.scene,
+        &h.sampler,
+        &h.tracer,
+        film.spp(),
+        h.seed,
+        h.max_depth,
+        h.clamp,
+        h.guiding,
+    );
     meta.push(("myriad.samples".into(), format!("{}..{}", h.samples[0], h.samples[1])));
     meta.push(("myriad.parts_revision".into(), h.myriad.clone()));
     crate::io::exr::write(&opts.output, &film.layers(h.aov_set()), &meta)?;

@@ -351,7 +351,7 @@ impl fmt::Display for RenderReport {
                 g.regions,
                 g.nodes,
                 g.records,
-                crate::learning::LEARN_UNTIL.min(st.spp),
+                crate::learning::GUIDE_UNTIL.min(st.spp),
                 human_bytes(g.memory_bytes as u64),
                 human_duration(g.learning_time)
             )?;

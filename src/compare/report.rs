@@ -133,6 +133,9 @@ pub struct CompareReport {
     /// The runs' sample clamping, `off` or `DIRECT,INDIRECT` (the reference is not clamped,
     /// so the bias column shows what clamping takes away).
     pub clamp: String,
+    /// Path guiding of the runs: `off`, or `on` with what it learned (the most any run held,
+    /// its learning time).
+    pub guiding: String,
     /// Render threads.
     pub threads: usize,
     /// The reference.
@@ -256,12 +259,13 @@ impl CompareReport {
     pub fn markdown(&self, sheet: &str, plot: &str) -> String {
         let mut md = format!("# myriad compare: {}\n\n", self.scene);
         md += &format!(
-            "{}, {} × {} px, max depth {}, clamp {}, {} threads, {} seed(s). Reference: `{}` ({}{}).\n\n",
+            "{}, {} × {} px, max depth {}, clamp {}, guiding {}, {} threads, {} seed(s). Reference: `{}` ({}{}).\n\n",
             self.mode,
             self.resolution[0],
             self.resolution[1],
             self.max_depth,
             self.clamp,
+            self.guiding,
             self.threads,
             self.samplers.first().map_or(0, |s| s.runs.len()),
             self.reference.path,

@@ -108,8 +108,8 @@ impl Quadtree {
         // (new node, old node if it exists, its quadrants' light, depth)
         let mut stack = vec![(0usize, Some(0usize), sums[0].map(|s| s as f64), 1u32)];
         while let Some((node, old, light, depth)) = stack.pop() {
-            for q in 0..4 {
-                if depth >= MAX_DEPTH || light[q] <= SPLIT_SHARE * total as f64 {
+            for (q, &quadrant_light) in light.iter().enumerate() {
+                if depth >= MAX_DEPTH || quadrant_light <= SPLIT_SHARE * total as f64 {
                     continue;
                 }
                 let child = out.children.len();
@@ -118,7 +118,7 @@ impl Quadtree {
                 let old_child = old.map(|o| self.children[o][q] as usize).filter(|&c| c != 0);
                 let below = match old_child {
                     Some(c) => sums[c].map(|s| s as f64),
-                    None => [light[q] / 4.0; 4],
+                    None => [quadrant_light / 4.0; 4],
                 };
                 stack.push((child, old_child, below, depth + 1));
             }

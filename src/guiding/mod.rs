@@ -27,11 +27,18 @@ pub use directions::{Directions, Quadtree, from_square, to_square};
 
 use crate::math::{Fixed, Vec3A};
 
+/// Samples per pixel after which the guide stays as it is.
+pub const GUIDE_UNTIL: u32 = 64;
 /// Records a region may take in an iteration of one sample per pixel before it is halved
 /// (Müller et al.'s c, which grows with √spp).
 pub const SPLIT_SAMPLES: f64 = 4000.0;
-/// Most quadtree nodes over all regions: 32 bytes of records and 32 of distribution each.
+/// Most quadtree nodes over all regions.
 pub const MAX_NODES: usize = 1 << 18;
+/// Bytes a quadtree node takes while it is both learned and recorded into: 32 of
+/// distribution, 16 of cut and 32 of records.
+const NODE_BYTES: usize = 80;
+/// The most guiding holds.
+pub const MAX_BYTES: usize = MAX_NODES * NODE_BYTES;
 /// Fractional bits of a recorded value.
 const RECORD_BITS: i32 = 20;
 /// Largest value a record keeps (a firefly's weight in what is learned is capped; the image
@@ -190,7 +197,7 @@ impl Records {
     /// Bytes it holds.
     fn bytes(&self) -> usize {
         let nodes: usize = self.trees.iter().map(Quadtree::nodes).sum();
-        nodes * (16 + 32) + self.counts.len() * 8 + self.regions.nodes.len() * 8
+        nodes * (NODE_BYTES - 32) + self.counts.len() * 8 + self.regions.nodes.len() * 8
     }
 }
 

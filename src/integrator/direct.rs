@@ -102,7 +102,7 @@ pub fn estimate_direct(
                 Some(s) => {
                     debug_assert!(s.pmf > 0.0);
                     let light = &scene.lights[s.light.0 as usize];
-                    let Tally { rays, seen } = tally;
+                    let Tally { rays, seen, .. } = tally;
                     let observe = |c, visible| seen.record_light_sample(strategy, &ctx, s.light, c, visible);
                     light_contribution(scene, light, s.pmf, scattering, p, medium, u_point, rays, observe)
                 }

@@ -9,8 +9,7 @@
 //! density and the image stays unbiased. Next-event estimation weighs its light samples
 //! against the same mixture density. Below [`MIN_ROUGHNESS`] nothing is guided.
 
-use super::Tally;
-use crate::guiding::{Directions, Guide};
+use crate::guiding::{Directions, Guide, Records};
 use crate::material::{BsdfSample, ShadingPoint};
 use crate::math::{Rgb, Vec3A, luminance};
 use crate::sampling::{Dim, SampleStream};
@@ -20,8 +19,6 @@ use crate::sampling::{Dim, SampleStream};
 pub const GUIDED_SHARE: f32 = 0.5;
 /// Mean roughness below which a vertex is not guided (Cycles' default threshold).
 pub const MIN_ROUGHNESS: f32 = 0.05;
-/// Vertices of a path recorded for guiding (deeper ones are not).
-const RECORDED: usize = 16;
 
 /// A shading point and, where guiding has learned, the distribution mixed into its sampling.
 #[derive(Clone, Copy, Debug)]
@@ -85,7 +82,7 @@ impl<'a> Scattering<'a> {
 }
 
 /// A vertex a path left by a sampled direction, for guiding to learn from.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 struct TrailVertex {
     p: Vec3A,
     wi: Vec3A,
@@ -98,12 +95,12 @@ struct TrailVertex {
     gathered: Rgb,
 }
 
-/// The vertices of one path that guiding learns from: at its end, each learns the light
-/// that came back through it, `(L_end − L_then) / β_then`.
+/// The vertices of the path being traced that guiding learns from: at its end, each learns
+/// the light that came back through it, `(L_end − L_then) / β_then`. One per worker, reused
+/// path after path (no allocation once it has grown to a path's length).
 #[derive(Debug, Default)]
 pub struct Trail {
-    vertices: [TrailVertex; RECORDED],
-    len: usize,
+    vertices: Vec<TrailVertex>,
 }
 
 impl Trail {
@@ -111,16 +108,13 @@ impl Trail {
     /// `beta` after it, having gathered `gathered` so far.
     #[inline]
     pub fn push(&mut self, p: Vec3A, wi: Vec3A, pdf: f32, beta: Rgb, gathered: Rgb) {
-        if self.len < RECORDED {
-            self.vertices[self.len] = TrailVertex { p, wi, pdf, beta, gathered };
-            self.len += 1;
-        }
+        self.vertices.push(TrailVertex { p, wi, pdf, beta, gathered });
     }
 
-    /// Records what came back through each vertex, the path having gathered `total`.
-    pub fn close(&self, total: Rgb, tally: &Tally) {
-        let Some(records) = tally.seen.guide_records() else { return };
-        for v in &self.vertices[..self.len] {
+    /// Records into `records` what came back through each vertex, the path having gathered
+    /// `total`, and empties the trail for the next path.
+    pub fn close(&mut self, total: Rgb, records: &Records) {
+        for v in self.vertices.drain(..) {
             let d = total - v.gathered;
             let per = |d: f32, b: f32| if b > 0.0 { d / b } else { 0.0 };
             let arriving = Rgb::new(per(d.x, v.beta.x), per(d.y, v.beta.y), per(d.z, v.beta.z));

@@ -31,6 +31,8 @@ pub struct Tally {
     pub rays: RayCounters,
     /// What the paths saw, for whatever learns from it (empty when nothing does).
     pub seen: Seen,
+    /// The path under way's vertices, while path guiding learns (scratch, not merged).
+    pub trail: guided::Trail,
 }
 
 /// Rays traced by one worker and where the timed paths spent their time, summed at the end

@@ -8,7 +8,7 @@
 //! numbers. Each contribution may be clamped as Cycles clamps ([`Clamp`]; off by default).
 
 use super::direct::estimate_direct;
-use super::guided::{Scattering, Trail};
+use super::guided::Scattering;
 use super::timing::timed;
 use super::transmittance;
 use super::{RayCounters, Tally};
@@ -224,8 +224,8 @@ impl Tracer<'_> {
         let mut prev: Option<Previous> = None;
         // The absorption of the glass the ray travels through (zero outside any).
         let mut medium = Rgb::ZERO;
-        // The vertices guiding learns from, while it learns.
-        let mut trail = tally.seen.guide_records().map(|_| Trail::default());
+        // Whether path guiding learns from this path's vertices (`tally.trail`).
+        let recording = tally.seen.guide_records().is_some();
         let mut depth = 0u32;
         loop {
             let counters = &mut tally.rays;
@@ -279,8 +279,8 @@ impl Tracer<'_> {
 
             let Some(bs) = scattering.sample(stream, depth) else { break };
             beta *= bs.weight;
-            if let Some(t) = trail.as_mut().filter(|_| scattering.guidable()) {
-                t.push(hit.p, bs.wi, bs.pdf, beta, l);
+            if recording && scattering.guidable() {
+                tally.trail.push(hit.p, bs.wi, bs.pdf, beta, l);
             }
             // Refracting into a solid glass object puts the ray in its volume; out of one, back
             // outside (objects are not nested).
@@ -300,8 +300,8 @@ impl Tracer<'_> {
             }
         }
         debug_assert!(l.is_finite(), "non-finite radiance {l}");
-        if let Some(t) = &trail {
-            t.close(l, tally);
+        if let Some(records) = tally.seen.guide_records() {
+            tally.trail.close(l, records);
         }
         PathSample { radiance: l, first_hit }
     }

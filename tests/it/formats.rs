@@ -416,7 +416,8 @@ fn lamps_inside_glass_render_as_cycles_without_its_light_sampling_bias() {
     // 4 × 4-pixel region is measured as the spread of its mean over four seeds. Guided paths
     // must give the same picture: two of them again with path guiding on.
     const SEEDS: u64 = 4;
-    let unguided = ["bulb_clear", "bulb_frosted_02", "bulb_frosted_045", "bulb_frosted_08", "bulb_shell"].map(|n| (n, false));
+    let unguided =
+        ["bulb_clear", "bulb_frosted_02", "bulb_frosted_045", "bulb_frosted_08", "bulb_shell"].map(|n| (n, false));
     for (name, guiding) in unguided.into_iter().chain([("bulb_clear", true), ("bulb_frosted_045", true)]) {
         let reference = blender(&format!("factors/{name}.cycles.exr"));
         let (size, cycles) = cycles_downsampled(&reference, 4);

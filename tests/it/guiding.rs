@@ -48,7 +48,8 @@ fn directions_match(label: &str, draw: impl Fn(usize) -> Option<Vec3A>, pdf: imp
         if let Some(d) = draw(k) {
             assert!((d.length() - 1.0).abs() < 1e-3, "{label}: not a unit direction {d}");
             let s = to_square(d);
-            let bin = ((s.x * BINS as f32) as usize).min(BINS - 1) + ((s.y * BINS as f32) as usize).min(BINS - 1) * BINS;
+            let bin =
+                ((s.x * BINS as f32) as usize).min(BINS - 1) + ((s.y * BINS as f32) as usize).min(BINS - 1) * BINS;
             observed[bin] += 1.0;
         }
     }
@@ -59,10 +60,8 @@ fn directions_match(label: &str, draw: impl Fn(usize) -> Option<Vec3A>, pdf: imp
             let (bx, by) = (bin % BINS, bin / BINS);
             let mut sum = 0.0;
             for j in 0..SUB * SUB {
-                let s = Vec2::new(
-                    (bx * SUB + j % SUB) as f32 + 0.5,
-                    (by * SUB + j / SUB) as f32 + 0.5,
-                ) / (BINS * SUB) as f32;
+                let s = Vec2::new((bx * SUB + j % SUB) as f32 + 0.5, (by * SUB + j / SUB) as f32 + 0.5)
+                    / (BINS * SUB) as f32;
                 sum += pdf(from_square(s)) as f64;
             }
             sum * 4.0 * PI / (BINS * BINS * SUB * SUB) as f64 * DRAWS as f64

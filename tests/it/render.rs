@@ -20,7 +20,14 @@ pub fn render_with(scene: &TestScene, kind: LightSamplerKind, spp: u32, max_dept
 }
 
 /// [`render_with`], with path guiding on or off.
-pub fn render_guided(scene: &TestScene, kind: LightSamplerKind, spp: u32, max_depth: u32, seed: u64, guiding: bool) -> Film {
+pub fn render_guided(
+    scene: &TestScene,
+    kind: LightSamplerKind,
+    spp: u32,
+    max_depth: u32,
+    seed: u64,
+    guiding: bool,
+) -> Film {
     let strategy = LightStrategy::build(kind, &scene.lights, scene.center, scene.radius);
     let resolution = scene.resolution;
     let settings = RenderSettings {

@@ -20,10 +20,12 @@ pub use reference::{MAX_REFERENCE_TIME, NOISY_REFERENCE, REFERENCE_FACTOR, REFER
 use std::io::Write;
 use std::time::Duration;
 
-use super::{SceneOptions, load_scene};
+use super::{SceneOptions, human_duration, load_scene};
 use crate::compare::images::{SheetColumn, preview_picture};
 use crate::compare::report::{CompareReport, SamplerResult};
 use crate::error::{Error, Result};
+use crate::guiding::GuideStats;
+use crate::limits::human_bytes;
 use crate::math::Rgb;
 use crate::render::Budget;
 use crate::scene::{BuildOptions, Scene};
@@ -86,6 +88,7 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
     if let Some((run_noise, image)) = quietest {
         judge_reference(&mut reference.info, &reference.variance, image, run_noise);
     }
+    let guiding = guiding_summary(plan.guiding, samplers.iter().filter_map(|s| s.guide));
     let finished: Vec<_> = samplers.into_iter().map(|s| s.finish(&plan, &reference)).collect();
     let mut pictures = vec![reference.pixels];
     for (result, column, pixels) in finished {
@@ -100,6 +103,7 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
         resolution: [size.x, size.y],
         max_depth: plan.max_depth,
         clamp: plan.clamp.to_string(),
+        guiding,
         threads: rayon::current_num_threads(),
         reference: reference.info,
         samplers: results,
@@ -169,5 +173,22 @@ fn rank(results: &mut [SamplerResult]) {
     let best = results.iter().map(|r| r.efficiency.mean).fold(0.0f64, f64::max);
     for r in results {
         r.efficiency_vs_best = if best > 0.0 { r.efficiency.mean / best } else { 0.0 };
+    }
+}
+
+/// The report's word on path guiding: `off`, or `on` with the most any run learned into and
+/// the longest it took to learn.
+fn guiding_summary(on: bool, stats: impl Iterator<Item = GuideStats>) -> String {
+    let (mut memory, mut time, mut regions) = (0, Duration::ZERO, 0);
+    for g in stats {
+        (memory, time, regions) = (memory.max(g.memory_bytes), time.max(g.learning_time), regions.max(g.regions));
+    }
+    match on {
+        false => "off".into(),
+        true => format!(
+            "on ({regions} regions, {} learned in {} per run at most)",
+            human_bytes(memory as u64),
+            human_duration(time)
+        ),
     }
 }

@@ -33,6 +33,7 @@ pub(crate) fn html_page(
         ("size", format!("{} × {} px", size.x, size.y)),
         ("max depth", report.max_depth.to_string()),
         ("clamp", report.clamp.clone()),
+        ("guiding", report.guiding.clone()),
         ("threads", report.threads.to_string()),
         ("seeds", seeds.join(", ")),
         ("reference", format!("{} ({})", report.reference.path, report.reference.origin)),

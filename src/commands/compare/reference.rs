@@ -146,8 +146,15 @@ pub(crate) fn reference(
     let strategy = LightStrategy::build(sampler, &scene.lights, scene.center, scene.radius);
     let aovs = AovSet { variance: true, ..Default::default() };
     // Never clamped: the reference is the unbiased picture.
-    let settings =
-        RenderSettings { budget, seed: REFERENCE_SEED, max_depth, clamp: Clamp::OFF, guiding: false, resolution: size, aovs };
+    let settings = RenderSettings {
+        budget,
+        seed: REFERENCE_SEED,
+        max_depth,
+        clamp: Clamp::OFF,
+        guiding: false,
+        resolution: size,
+        aovs,
+    };
     let out = render(scene, &strategy, &settings, &mut Progress::new(opts.progress, "ref"));
     // A reference stopped short is not the reference its key describes.
     if out.stats.stopped != Stop::No {

@@ -16,12 +16,13 @@ use crate::compare::metrics::{
 use crate::compare::report::{RunResult, SamplerResult, Stat, num};
 use crate::error::{Error, Result};
 use crate::film::{AovSet, Film};
+use crate::guiding::GuideStats;
 use crate::interrupt::Stop;
 use crate::light_sampler::LightStrategy;
 use crate::math::{Rgb, UVec2};
 use crate::render::{RenderObserver, render};
 use crate::scene::Scene;
-use crate::settings::LightSamplerKind;
+use crate::settings::{LightSamplerKind, on_off};
 
 /// One sampler's renders, seed after seed: its strategy built once, each run's numbers, the
 /// statistics over seeds, and what the first seed's run left for the report.
@@ -31,6 +32,8 @@ pub(crate) struct SamplerRuns {
     pub(crate) build_seconds: f64,
     /// The most the strategy held in any run (a learning one holds more once it has learned).
     pub(crate) memory_bytes: usize,
+    /// What path guiding learned in the run that learned most (guided runs only).
+    pub(crate) guide: Option<GuideStats>,
     pub(crate) runs: Vec<RunResult>,
     pub(crate) seeds: SeedStatistics,
     pub(crate) first: Option<FirstRun>,
@@ -85,7 +88,7 @@ pub(crate) fn render_run(
     kind: LightSamplerKind,
     seed: u64,
     reference: &Reference,
-) -> Result<(Run, usize)> {
+) -> Result<(Run, usize, Option<GuideStats>)> {
     let mut watch = Convergence {
         progress: Progress::new(opts.progress, kind.name()),
         reference: &reference.pixels,
@@ -99,7 +102,8 @@ pub(crate) fn render_run(
         return Err(Error::Interrupted);
     }
     let memory = r.stats.learned.map_or(0, |l| l.memory_bytes);
-    Ok((Run { film: r.film, seconds: r.stats.elapsed.as_secs_f64(), convergence: watch.points }, memory))
+    let run = Run { film: r.film, seconds: r.stats.elapsed.as_secs_f64(), convergence: watch.points };
+    Ok((run, memory, r.stats.guide))
 }
 
 /// Reads one run rendered elsewhere (see [`CompareOptions::runs`]), checking that it is the
@@ -114,6 +118,7 @@ pub(crate) fn load_run(dir: &Path, plan: &Plan, scene_hash: &str, kind: LightSam
         ("samples", format!("{}..{}", h.samples[0], h.samples[1]), format!("0..{spp}")),
         ("max depth", h.max_depth.to_string(), plan.max_depth.to_string()),
         ("clamp", h.clamp.to_string(), plan.clamp.to_string()),
+        ("guiding", on_off(h.guiding).into(), on_off(plan.guiding).into()),
         ("resolution", format!("{:?}", h.resolution), format!("{:?}", plan.resolution.to_array())),
         ("scene contents", h.scene_hash.clone(), scene_hash.to_string()),
     ];
@@ -134,7 +139,7 @@ impl SamplerRuns {
         let build_seconds = t.elapsed().as_secs_f64();
         let memory_bytes = strategy.memory_bytes();
         let seeds = SeedStatistics::new((size.x * size.y) as usize);
-        Self { kind, strategy, build_seconds, memory_bytes, runs: Vec::new(), seeds, first: None }
+        Self { kind, strategy, build_seconds, memory_bytes, guide: None, runs: Vec::new(), seeds, first: None }
     }
 
     /// Renders (or, with `runs`, reads) the run with `seed` and measures it against the
@@ -155,8 +160,13 @@ impl SamplerRuns {
                 // A fresh copy per seed: `cells` builds its tables during a run, and a later
                 // seed must pay for them again to be timed fairly.
                 let fresh = self.strategy.clone();
-                let (run, memory) = render_run(opts, plan, &loaded.scene, &fresh, kind, seed, reference)?;
+                let (run, memory, guide) = render_run(opts, plan, &loaded.scene, &fresh, kind, seed, reference)?;
                 self.memory_bytes = self.memory_bytes.max(memory).max(fresh.memory_bytes());
+                if let Some(g) = guide
+                    && self.guide.is_none_or(|h| g.memory_bytes > h.memory_bytes)
+                {
+                    self.guide = Some(g);
+                }
                 run
             }
         };

@@ -14,13 +14,15 @@ const ORBIT_PER_PIXEL: f32 = 0.01;
 const DOLLY_PER_NOTCH: f32 = 0.1;
 
 /// The keys, as the status bar lists them.
-pub const KEYS: [&str; 6] = ["1-7 sampler", "+/- exposure", "E error", "S save", "R reset", "Esc quit"];
+pub const KEYS: [&str; 7] = ["1-7 sampler", "G guiding", "+/- exposure", "E error", "S save", "R reset", "Esc quit"];
 
 /// What a key asks for.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Action {
     /// Switch to this light sampler (restarts the accumulation).
     Sampler(LightSamplerKind),
+    /// Turn path guiding on or off (restarts the accumulation).
+    ToggleGuiding,
     /// Change the exposure by this many stops (display only).
     Exposure(f32),
     /// Show the false-colour relative error against the reference, or the render again.
@@ -43,6 +45,7 @@ pub fn action(key: Key) -> Option<Action> {
         Key::Equal | Key::NumPadPlus => Action::Exposure(EXPOSURE_STEP),
         Key::Minus | Key::NumPadMinus => Action::Exposure(-EXPOSURE_STEP),
         Key::E => Action::ToggleError,
+        Key::G => Action::ToggleGuiding,
         Key::S => Action::Save,
         Key::R => Action::ResetCamera,
         Key::Escape | Key::Q => Action::Quit,
@@ -110,6 +113,7 @@ mod tests {
         assert_eq!(action(Key::Key6), Some(Action::Sampler(LightSamplerKind::Learned)));
         assert_eq!(action(Key::Key7), Some(Action::Sampler(LightSamplerKind::Cells)));
         assert_eq!(action(Key::Minus), Some(Action::Exposure(-EXPOSURE_STEP)));
+        assert_eq!(action(Key::G), Some(Action::ToggleGuiding));
         assert_eq!(action(Key::Escape), Some(Action::Quit));
         assert_eq!(action(Key::Z), None);
     }

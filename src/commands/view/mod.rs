@@ -28,7 +28,7 @@ use minifb::{InputCallback, Key, MouseButton, MouseMode, Window, WindowOptions};
 
 use self::controls::{Action, Navigation};
 use self::worker::{Accumulate, Frame, Order, Report, View};
-use super::settings::RenderRequest;
+use super::settings::{RenderRequest, Resolved};
 use super::{SceneOptions, load_scene};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
@@ -134,7 +134,7 @@ pub fn view(opts: &ViewOptions) -> Result<ViewReport> {
     let cancel = AtomicBool::new(false);
     let (orders, their_orders) = mpsc::channel();
     let (their_reports, reports) = mpsc::channel();
-    let mut ui = Ui::new(opts, size, resolved.sampler, navigation, reference, built, &cancel);
+    let mut ui = Ui::new(opts, size, &resolved, navigation, reference, built, &cancel);
     // The first pass renders while the window opens.
     std::thread::scope(|s| {
         s.spawn(|| worker::run(scene, &plan, &cancel, their_orders, their_reports));
@@ -210,6 +210,8 @@ struct Ui<'a> {
     exposure: f32,
     show_error: bool,
     sampler: LightSamplerKind,
+    /// Whether paths are guided.
+    guiding: bool,
     camera: Camera,
     navigation: Navigation,
     reference: Option<(PathBuf, Vec<Rgb>)>,
@@ -230,7 +232,7 @@ impl<'a> Ui<'a> {
     fn new(
         opts: &'a ViewOptions,
         size: UVec2,
-        sampler: LightSamplerKind,
+        resolved: &Resolved,
         navigation: Navigation,
         reference: Option<(PathBuf, Vec<Rgb>)>,
         built: Instant,
@@ -245,7 +247,8 @@ impl<'a> Ui<'a> {
             size,
             exposure: opts.exposure,
             show_error: false,
-            sampler,
+            sampler: resolved.sampler,
+            guiding: resolved.guiding,
             camera: navigation.home,
             navigation,
             reference,
@@ -313,6 +316,10 @@ impl<'a> Ui<'a> {
                 self.sampler = s;
                 self.restart(orders);
             }
+            Action::ToggleGuiding => {
+                self.guiding = !self.guiding;
+                self.restart(orders);
+            }
             Action::Exposure(stops) => self.exposure += stops,
             Action::ToggleError if self.reference.is_some() => self.show_error = !self.show_error,
             Action::ToggleError => self.message = "no reference to show the error against: pass --reference".into(),
@@ -360,8 +367,12 @@ impl<'a> Ui<'a> {
         self.arrivals.clear();
         self.announced_done = false;
         self.cancel.store(true, Ordering::Relaxed);
-        let _ =
-            orders.send(Order::Show(View { generation: self.generation, sampler: self.sampler, camera: self.camera }));
+        let _ = orders.send(Order::Show(View {
+            generation: self.generation,
+            sampler: self.sampler,
+            guiding: self.guiding,
+            camera: self.camera,
+        }));
     }
 
     /// Takes what the render thread said; whether there is something new to show.

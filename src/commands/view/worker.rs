@@ -35,8 +35,18 @@ pub struct View {
     pub generation: u64,
     /// The light sampler.
     pub sampler: LightSamplerKind,
+    /// Whether paths are guided.
+    pub guiding: bool,
     /// Where the camera is.
     pub camera: Camera,
+}
+
+impl View {
+    /// What the status bar calls it: what chose the lights, and guiding when it is on.
+    fn label(&self, strategy: &LightStrategy) -> String {
+        let label = strategy.label(self.sampler);
+        if self.guiding { format!("{label} + guiding") } else { label }
+    }
 }
 
 /// What the window asks of the render thread.
@@ -137,7 +147,7 @@ fn accumulate(
     orders: &Receiver<Order>,
     reports: &Sender<Report>,
 ) -> Option<View> {
-    let settings = plan.settings;
+    let settings = RenderSettings { guiding: view.guiding, ..plan.settings };
     let size = settings.resolution;
     // Called off: a new view or the end is on its way; wait for it.
     let mut called_off = false;
@@ -194,7 +204,7 @@ fn accumulate(
         let frame = Frame {
             generation: view.generation,
             sampler: view.sampler,
-            label: strategy.label(view.sampler),
+            label: view.label(strategy),
             pixels: film.means(),
             spp: film.spp(),
             samples_per_second: size.x as f64 * size.y as f64 * film.spp() as f64 / elapsed.as_secs_f64().max(1e-9),
@@ -227,7 +237,7 @@ fn preview(
     Some(Frame {
         generation: view.generation,
         sampler: view.sampler,
-        label: strategy.label(view.sampler),
+        label: view.label(strategy),
         pixels,
         spp: 0,
         samples_per_second: 0.0,
