@@ -401,20 +401,24 @@ impl<'a> Progressive<'a> {
         let first = self.offset + self.film.spp();
         let recording = self.learning.as_ref().and_then(|l| l.recording(first));
         let (count, seen) = match recording {
-            Some((limit, seen)) => (count.min(limit), seen),
-            None => (count, Seen::default()),
+            Some((limit, seen)) => (count.min(limit), Some(seen)),
+            None => (count, None),
         };
+        // What the budget's last pass would teach is never used: it records nothing.
+        let last = self.settings.budget.fixed().is_some_and(|(a, n)| first + count >= a + n);
+        let seen = seen.filter(|_| !last);
         let learned = self.learning.as_ref();
         let strategy = learned.and_then(Learning::strategy).unwrap_or(self.strategy);
         let guide = learned.and_then(Learning::guide);
         let pass = Pass { scene: self.scene, strategy, guide, settings: &self.settings, first, count };
-        let tally = render_pass(&pass, &mut self.film, &seen, Watch { progress, cancel });
+        let tally =
+            render_pass(&pass, &mut self.film, seen.as_ref().unwrap_or(&Seen::default()), Watch { progress, cancel });
         if tally.cancelled {
             return None;
         }
         self.rays.add(&tally.rays);
         self.non_finite += tally.non_finite;
-        if let Some(l) = self.learning.as_mut() {
+        if let Some(l) = self.learning.as_mut().filter(|_| seen.is_some()) {
             l.after_pass(tally.seen, first + count);
         }
         Some(count)

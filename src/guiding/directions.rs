@@ -236,9 +236,9 @@ mod tests {
     fn refining_cuts_where_light_is_and_joins_where_it_is_not() {
         let tree = Quadtree::default();
         // All the light in quadrant 3: it is cut, and its parts while a part's even share
-        // (¼, 1/16, 1/64 of it) is over 1 %.
+        // (25, 6.25, 1.6, 0.4 % of the whole) is over 1 %.
         let fine = tree.refined(&tree.sums(&[0, 0, 0, 1000]));
-        assert_eq!(fine.nodes(), 1 + 1 + 4 + 16);
+        assert_eq!(fine.nodes(), 1 + 1 + 4 + 16 + 64);
         // Evenly spread light: every quadrant is cut while a quadrant holds over 1 %.
         let even = tree.refined(&tree.sums(&[250; 4]));
         assert_eq!(even.nodes(), 1 + 4 + 16 + 64);

@@ -2,10 +2,10 @@
 //! are sent there more often (Müller, Gross, Novák 2017, *Practical Path Guiding*).
 //!
 //! Owns: [`Guide`], what paths sample from (space cut into regions by a k-d tree of
-//! midpoint splits, a learned [`Directions`] per region), [`Records`], what paths record
-//! into (the next cut, with a fixed-point light sum per leaf quadrant and a sample count per
-//! region, added atomically: integer sums, so neither the thread count nor the order of the
-//! records changes a bit), and [`Guiding`], the state that turns one iteration's records
+//! midpoint splits, a learned [`Directions`] per region and side), [`Records`], what paths
+//! record into (the next cut, with a fixed-point light sum per leaf quadrant and a sample
+//! count per region and side, each worker thread into its own, added up at the end: integer
+//! sums, so neither the thread count nor the order of the records changes a bit), and [`Guiding`], the state that turns one iteration's records
 //! into the next [`Guide`] and the next cut. An iteration is a learning pass of
 //! [`crate::learning`] (samples 0..1, 1..2, 2..4, … up to its last power of two); the
 //! distributions a pass samples from are a function of the samples before it alone.
@@ -19,8 +19,7 @@
 
 mod directions;
 
-use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
 pub use directions::{Directions, Quadtree, from_square, to_square};
@@ -44,8 +43,26 @@ const RECORD_BITS: i32 = 20;
 /// Largest value a record keeps (a firefly's weight in what is learned is capped; the image
 /// is not touched).
 const RECORD_LIMIT: f64 = (1u64 << 23) as f64;
+/// Directional distributions per region: one per side a surface faces (±x, ±y, ±z by its
+/// normal's largest component), so that a floor and a wall or the two sides of a glass
+/// sheet in one region do not share what they learn.
+pub const SIDES: usize = 6;
 /// An entry of [`Regions`] that is a region's index rather than a node's.
 const LEAF: u32 = 1 << 31;
+
+/// Which of the [`SIDES`] a surface of normal `n` faces.
+#[inline]
+fn side(n: Vec3A) -> usize {
+    let a = n.abs();
+    let axis = if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
+    };
+    2 * axis + (n[axis] < 0.0) as usize
+}
 
 /// The scene's space as the unit cube: the cube around its bounding sphere.
 #[derive(Clone, Copy, Debug)]
@@ -132,8 +149,8 @@ impl Regions {
     }
 }
 
-/// What paths sample directions from: a learned distribution per region of space (none
-/// where nothing was learned there).
+/// What paths sample directions from: a learned distribution per region of space and side
+/// (none where nothing was learned there).
 #[derive(Clone, Debug)]
 pub struct Guide {
     space: Space,
@@ -142,25 +159,61 @@ pub struct Guide {
 }
 
 impl Guide {
-    /// The distribution learned for the region holding `p`.
+    /// The distribution learned for the region holding `p`, on the side normal `n` faces.
     #[inline]
-    pub fn at(&self, p: Vec3A) -> Option<&Directions> {
-        self.directions[self.regions.locate(self.space.unit(p))].as_ref()
+    pub fn at(&self, p: Vec3A, n: Vec3A) -> Option<&Directions> {
+        self.directions[self.regions.locate(self.space.unit(p)) * SIDES + side(n)].as_ref()
     }
 }
 
-/// What paths record into during an iteration (shared by every worker).
+/// What paths record into during an iteration: the cut, and per worker thread its own sums
+/// (so that no two threads add to one cache line), added up when the iteration ends.
 #[derive(Debug)]
 pub struct Records {
     space: Space,
     regions: Regions,
+    /// Per region and side (region × [`SIDES`] + side).
     trees: Vec<Quadtree>,
-    /// Where each region's leaf quadrants start in `light`.
+    /// Where each region's leaf quadrants start in a [`Sums`]' `light`.
     offsets: Vec<usize>,
+    /// Leaf quadrants over all regions and sides.
+    quadrants: usize,
+    /// One per rayon worker thread, by its index (filled on its first record).
+    slots: Vec<Mutex<Sums>>,
+}
+
+/// One thread's sums over an iteration.
+#[derive(Debug, Default)]
+struct Sums {
     /// Light per leaf quadrant, fixed point with [`RECORD_BITS`] fractional bits.
-    light: Vec<AtomicU64>,
-    /// Records per region.
-    counts: Vec<AtomicU64>,
+    light: Vec<u64>,
+    /// Records per region and side.
+    counts: Vec<u64>,
+}
+
+/// A worker thread's hold on its sums, for the records of one path.
+pub struct Recorder<'a> {
+    records: &'a Records,
+    sums: MutexGuard<'a, Sums>,
+}
+
+impl Recorder<'_> {
+    /// Records that light of luminance `value` (over the density it was sampled with)
+    /// arrived at `p`, on the side normal `n` faces, from direction `wi`.
+    #[inline]
+    pub fn record(&mut self, p: Vec3A, n: Vec3A, wi: Vec3A, value: f32) {
+        let r = &self.records;
+        if self.sums.counts.is_empty() {
+            *self.sums = Sums { light: vec![0; r.quadrants], counts: vec![0; r.trees.len()] };
+        }
+        let slot = r.regions.locate(r.space.unit(p)) * SIDES + side(n);
+        self.sums.counts[slot] += 1;
+        let q = Fixed::of(value as f64, RECORD_BITS, RECORD_LIMIT).max(0) as u64;
+        if q > 0 {
+            let leaf = r.trees[slot].leaf(to_square(wi));
+            self.sums.light[r.offsets[slot] + leaf] += q;
+        }
+    }
 }
 
 impl Records {
@@ -168,36 +221,37 @@ impl Records {
         let offsets: Vec<usize> =
             trees.iter().scan(0, |start, t| Some(std::mem::replace(start, *start + 4 * t.nodes()))).collect();
         let quadrants = trees.iter().map(|t| 4 * t.nodes()).sum();
-        let light = (0..quadrants).map(|_| AtomicU64::new(0)).collect();
-        let counts = (0..trees.len()).map(|_| AtomicU64::new(0)).collect();
-        Self { space, regions, trees, offsets, light, counts }
+        let slots = (0..rayon::current_num_threads().max(1)).map(|_| Mutex::default()).collect();
+        Self { space, regions, trees, offsets, quadrants, slots }
     }
 
-    /// Records that light of luminance `value` (over the density it was sampled with)
-    /// arrived at `p` from direction `wi`.
-    #[inline]
-    pub fn record(&self, p: Vec3A, wi: Vec3A, value: f32) {
-        let r = self.regions.locate(self.space.unit(p));
-        self.counts[r].fetch_add(1, Ordering::Relaxed);
-        let q = Fixed::of(value as f64, RECORD_BITS, RECORD_LIMIT).max(0) as u64;
-        if q > 0 {
-            let leaf = self.trees[r].leaf(to_square(wi));
-            self.light[self.offsets[r] + leaf].fetch_add(q, Ordering::Relaxed);
+    /// The calling thread's sums, to record into (a thread outside rayon's pool shares the
+    /// first).
+    pub fn recorder(&self) -> Recorder<'_> {
+        let slot = &self.slots[rayon::current_thread_index().unwrap_or(0) % self.slots.len()];
+        Recorder { records: self, sums: slot.lock().unwrap_or_else(|e| e.into_inner()) }
+    }
+
+    /// Every thread's sums added up: integer sums, whatever thread recorded what.
+    fn total(&self) -> Sums {
+        let mut total = Sums { light: vec![0; self.quadrants], counts: vec![0; self.trees.len()] };
+        for slot in &self.slots {
+            let sums = slot.lock().unwrap_or_else(|e| e.into_inner());
+            for (t, s) in total.light.iter_mut().zip(&sums.light) {
+                *t += s;
+            }
+            for (t, s) in total.counts.iter_mut().zip(&sums.counts) {
+                *t += s;
+            }
         }
-    }
-
-    /// Region `r`'s light per quadrant of each of its nodes.
-    fn sums(&self, r: usize) -> Vec<[u64; 4]> {
-        let tree = &self.trees[r];
-        let leaves: Vec<u64> =
-            self.light[self.offsets[r]..][..4 * tree.nodes()].iter().map(|a| a.load(Ordering::Relaxed)).collect();
-        tree.sums(&leaves)
+        total
     }
 
     /// Bytes it holds.
     fn bytes(&self) -> usize {
         let nodes: usize = self.trees.iter().map(Quadtree::nodes).sum();
-        nodes * (NODE_BYTES - 32) + self.counts.len() * 8 + self.regions.nodes.len() * 8
+        let filled = self.slots.iter().filter(|s| !s.lock().unwrap_or_else(|e| e.into_inner()).counts.is_empty());
+        nodes * (NODE_BYTES - 32) * filled.count().max(1) + self.trees.len() * 8 + self.regions.nodes.len() * 8
     }
 }
 
@@ -229,8 +283,8 @@ impl Guiding {
     /// Nothing learned yet, for a scene within the sphere (`center`, `radius`).
     pub fn new(center: Vec3A, radius: f32) -> Self {
         let space = Space::new(center, radius);
-        let guide = Guide { space, regions: Regions::whole(), directions: vec![None] };
-        let records = Arc::new(Records::new(space, Regions::whole(), vec![Quadtree::default()]));
+        let guide = Guide { space, regions: Regions::whole(), directions: vec![None; SIDES] };
+        let records = Arc::new(Records::new(space, Regions::whole(), vec![Quadtree::default(); SIDES]));
         Self { guide, records, stats: GuideStats::default() }
     }
 
@@ -249,8 +303,9 @@ impl Guiding {
     pub fn learn(&mut self, spp: u32) {
         let start = Instant::now();
         let old = &self.records;
-        let sums: Vec<Vec<[u64; 4]>> = (0..old.trees.len()).map(|r| old.sums(r)).collect();
-        let counts: Vec<u64> = old.counts.iter().map(|c| c.load(Ordering::Relaxed)).collect();
+        let Sums { light, counts } = old.total();
+        let sums: Vec<Vec<[u64; 4]>> =
+            old.trees.iter().zip(&old.offsets).map(|(t, &o)| t.sums(&light[o..][..4 * t.nodes()])).collect();
         let directions: Vec<Option<Directions>> =
             old.trees.iter().zip(&sums).map(|(t, s)| Directions::new(t, s)).collect();
         let refined: Vec<Quadtree> = old.trees.iter().zip(&sums).map(|(t, s)| t.refined(s)).collect();
@@ -258,20 +313,21 @@ impl Guiding {
         let threshold = SPLIT_SAMPLES * (spp.max(1) as f64).sqrt();
         let mut room = MAX_NODES.saturating_sub(refined.iter().map(Quadtree::nodes).sum());
         let halvings: Vec<u32> = refined
-            .iter()
-            .zip(&counts)
-            .map(|(tree, &n)| {
+            .chunks(SIDES)
+            .zip(counts.chunks(SIDES))
+            .map(|(trees, counts)| {
+                let (nodes, n) = (trees.iter().map(Quadtree::nodes).sum::<usize>(), counts.iter().sum::<u64>());
                 let mut k = 0;
-                // Going from 2^k copies of the tree to 2^(k+1) adds 2^k.
-                while n as f64 / (1u64 << k) as f64 > threshold && tree.nodes() << k <= room {
-                    room -= tree.nodes() << k;
+                // Going from 2^k copies of the trees to 2^(k+1) adds 2^k.
+                while n as f64 / (1u64 << k) as f64 > threshold && nodes << k <= room {
+                    room -= nodes << k;
                     k += 1;
                 }
                 k
             })
             .collect();
         let (regions, origin) = old.regions.split(|r| halvings[r]);
-        let trees = origin.iter().map(|&o| refined[o].clone()).collect();
+        let trees = origin.iter().flat_map(|&o| refined[o * SIDES..][..SIDES].iter().cloned()).collect();
         let space = old.space;
         self.guide = Guide { space, regions: old.regions.clone(), directions };
         self.records = Arc::new(Records::new(space, regions, trees));

@@ -35,7 +35,10 @@ impl<'a> Scattering<'a> {
     pub fn new(sp: ShadingPoint, p: Vec3A, guide: Option<&'a Guide>) -> Self {
         let guide = guide.and_then(|g| {
             let roughness = sp.mean_roughness();
-            (roughness >= MIN_ROUGHNESS).then(|| g.at(p)).flatten().map(|d| (d, GUIDED_SHARE * roughness.min(1.0)))
+            (roughness >= MIN_ROUGHNESS)
+                .then(|| g.at(p, sp.n_geom))
+                .flatten()
+                .map(|d| (d, GUIDED_SHARE * roughness.min(1.0)))
         });
         Self { sp, guide }
     }
@@ -85,6 +88,8 @@ impl<'a> Scattering<'a> {
 #[derive(Clone, Copy, Debug)]
 struct TrailVertex {
     p: Vec3A,
+    /// The side of the surface it was on (the face-forwarded geometric normal).
+    n: Vec3A,
     wi: Vec3A,
     /// The density `wi` was drawn with.
     pdf: f32,
@@ -104,21 +109,26 @@ pub struct Trail {
 }
 
 impl Trail {
-    /// Notes that the path left `p` along `wi` (drawn with density `pdf`) with throughput
-    /// `beta` after it, having gathered `gathered` so far.
+    /// Notes that the path left point `p`, where `s` scattered it as `sample` says, with
+    /// throughput `beta` after it, having gathered `gathered` so far.
     #[inline]
-    pub fn push(&mut self, p: Vec3A, wi: Vec3A, pdf: f32, beta: Rgb, gathered: Rgb) {
-        self.vertices.push(TrailVertex { p, wi, pdf, beta, gathered });
+    pub fn push(&mut self, p: Vec3A, s: &Scattering, sample: &BsdfSample, beta: Rgb, gathered: Rgb) {
+        let (n, wi, pdf) = (s.sp.n_geom, sample.wi, sample.pdf);
+        self.vertices.push(TrailVertex { p, n, wi, pdf, beta, gathered });
     }
 
     /// Records into `records` what came back through each vertex, the path having gathered
     /// `total`, and empties the trail for the next path.
     pub fn close(&mut self, total: Rgb, records: &Records) {
+        if self.vertices.is_empty() {
+            return;
+        }
+        let mut recorder = records.recorder();
         for v in self.vertices.drain(..) {
             let d = total - v.gathered;
             let per = |d: f32, b: f32| if b > 0.0 { d / b } else { 0.0 };
             let arriving = Rgb::new(per(d.x, v.beta.x), per(d.y, v.beta.y), per(d.z, v.beta.z));
-            records.record(v.p, v.wi, luminance(arriving).max(0.0) / v.pdf);
+            recorder.record(v.p, v.n, v.wi, luminance(arriving).max(0.0) / v.pdf);
         }
     }
 }

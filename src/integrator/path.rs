@@ -280,7 +280,7 @@ impl Tracer<'_> {
             let Some(bs) = scattering.sample(stream, depth) else { break };
             beta *= bs.weight;
             if recording && scattering.guidable() {
-                tally.trail.push(hit.p, bs.wi, bs.pdf, beta, l);
+                tally.trail.push(hit.p, &scattering, &bs, beta, l);
             }
             // Refracting into a solid glass object puts the ray in its volume; out of one, back
             // outside (objects are not nested).

@@ -102,10 +102,12 @@ fn guiding() -> Guiding {
     let mut g = Guiding::new(Vec3A::ZERO, 1.0);
     for _ in 0..3 {
         let records = g.records();
+        let mut recorder = records.recorder();
         for i in 0..128 * 128 {
             let s = Vec2::new((i % 128) as f32 + 0.5, (i / 128) as f32 + 0.5) / 128.0;
-            records.record(Vec3A::ZERO, from_square(s), light(from_square(s)) as f32);
+            recorder.record(Vec3A::ZERO, Vec3A::Z, from_square(s), light(from_square(s)) as f32);
         }
+        drop(recorder);
         g.learn(1);
     }
     g
@@ -115,7 +117,8 @@ fn guiding() -> Guiding {
 fn the_guided_mixture_samples_what_its_density_says() {
     let g = guiding();
     let guide = g.guide();
-    assert!(guide.at(Vec3A::ZERO).is_some(), "learned at the origin");
+    assert!(guide.at(Vec3A::ZERO, Vec3A::Z).is_some(), "learned at the origin, facing +z");
+    assert!(guide.at(Vec3A::ZERO, -Vec3A::Z).is_none(), "nothing learned facing -z");
     let wo = Vec3A::new(0.3, 0.2, 0.93).normalize();
     let plastic = Principled::new(Rgb::new(0.6, 0.3, 0.2), 0.0, 0.5, 1.5, 1.0, Rgb::ONE);
     let bsdfs = [
