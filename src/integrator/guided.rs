@@ -27,27 +27,27 @@ pub struct Scattering<'a> {
     pub sp: ShadingPoint,
     /// The learned distribution and the share α of directions it draws.
     guide: Option<(&'a Directions, f32)>,
+    /// Whether the render guides and the BSDF is rough enough to be guided here (where a
+    /// path learning for guiding records what comes through).
+    guidable: bool,
 }
 
 impl<'a> Scattering<'a> {
     /// Scattering at point `p` of `sp`, guided by `guide` where it has learned something.
     #[inline]
     pub fn new(sp: ShadingPoint, p: Vec3A, guide: Option<&'a Guide>) -> Self {
-        let guide = guide.and_then(|g| {
-            let roughness = sp.mean_roughness();
-            (roughness >= MIN_ROUGHNESS)
-                .then(|| g.at(p, sp.n_geom))
-                .flatten()
-                .map(|d| (d, GUIDED_SHARE * roughness.min(1.0)))
-        });
-        Self { sp, guide }
+        let Some(g) = guide else { return Self { sp, guide: None, guidable: false } };
+        let roughness = sp.mean_roughness();
+        let guidable = roughness >= MIN_ROUGHNESS;
+        let guide = guidable.then(|| g.at(p, sp.n_geom)).flatten().map(|d| (d, GUIDED_SHARE * roughness.min(1.0)));
+        Self { sp, guide, guidable }
     }
 
     /// Whether guiding may take part here (and a path learning for it should record what
     /// comes through).
     #[inline]
     pub fn guidable(&self) -> bool {
-        self.sp.mean_roughness() >= MIN_ROUGHNESS
+        self.guidable
     }
 
     /// Density of sampling world direction `wi` (unit).
