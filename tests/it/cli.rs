@@ -223,6 +223,37 @@ fn clamping_darkens_what_it_clamps_and_every_output_says_so() {
 }
 
 #[test]
+fn guiding_is_asked_for_anywhere_and_every_output_says_so() {
+    let (dir, _) = scene_file(GOOD);
+    let d = dir.path();
+    let guiding_of = |name: &str| {
+        let (_, meta) = myriad::io::exr::read(&d.join(name)).unwrap();
+        meta.into_iter().find(|(k, _)| k == "myriad.guiding").map(|(_, v)| v)
+    };
+    let said = crate::split::ok(&["render", "scene.ron", "--spp", "16", "--guiding", "on", "-o", "on.exr"], d);
+    assert!(said.contains("guiding ") && said.contains("regions") && said.contains("path vertices"), "{said}");
+    crate::split::ok(&["render", "scene.ron", "--spp", "16", "--guiding", "off", "-o", "off.exr"], d);
+    assert_eq!((guiding_of("on.exr").as_deref(), guiding_of("off.exr")), (Some("on"), None));
+    // The scene file's switch gives the command line's image.
+    let in_file =
+        GOOD.replace("film: (resolution: (16, 12)),", "film: (resolution: (16, 12)),\n    render: (guiding: true),");
+    std::fs::write(d.join("guided.ron"), &in_file).unwrap();
+    crate::split::ok(&["render", "guided.ron", "--spp", "16", "-o", "from-file.exr"], d);
+    crate::split::same_pixels(&d.join("from-file.exr"), &d.join("on.exr"));
+    // The command line wins over the file.
+    crate::split::ok(&["render", "guided.ron", "--spp", "16", "--guiding", "off", "-o", "overridden.exr"], d);
+    crate::split::same_pixels(&d.join("overridden.exr"), &d.join("off.exr"));
+    expect_usage_error(&["render", "scene.ron", "--guiding", "yes"], &["on or off", "'yes'"]);
+    let info = crate::split::ok(&["info", "guided.ron"], d);
+    assert!(info.contains("guiding      on") && info.contains("learns until 64 spp"), "{info}");
+    // compare guides its runs, never its reference, and says so.
+    let args = ["compare", "scene.ron", "--samplers", "tree", "--spp", "4", "--reference-spp", "8"];
+    crate::split::ok(&[&args[..], &["--guiding", "on", "--out-dir", "cmp"]].concat(), d);
+    let report = std::fs::read_to_string(d.join("cmp/report.md")).unwrap();
+    assert!(report.contains("guiding on (") && report.contains("learned in"), "{report}");
+}
+
+#[test]
 fn compare_on_a_broken_scene_leaves_no_folder() {
     let text = GOOD.replace("lights: [", "lights: [ Point(position: (0, 1.5, 0), intensity: (1e38, 1e38, 1e38)),");
     let (dir, _) = scene_file(&text);
