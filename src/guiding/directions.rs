@@ -1,31 +1,44 @@
 //! Directional distributions over the sphere: Müller et al.'s quadtrees.
 //!
-//! A direction maps to the unit square by its cylindrical coordinates, (x, y) =
-//! ((cos θ + 1)/2, φ/2π) with θ from world +z: an equal-area map, so a density on the square
-//! is a density in solid angle times 4π. A [`Quadtree`] cuts the square into quadrants,
-//! finer where more light arrived; a [`Directions`] is one with a probability per quadrant,
-//! sampled by descending and reporting the product of the choices as its exact density.
-//! Quadrants are numbered `x ≥ ½` + 2·(`y ≥ ½`).
-
-use std::f32::consts::{PI, TAU};
+//! A direction maps to the unit square by x = (cos θ + 1)/2, θ from world +z, and y = t/4,
+//! t ∈ [0, 4) the *diamond angle* of its azimuth (quadrant k of the xy-plane plus
+//! u = |second|/(|first| + |second|) of the direction's coordinates turned into the first
+//! quadrant): monotone in the azimuth and computed without trigonometry either way (a
+//! direction back from u is (1 − u, u) normalised). A patch of the square of area A covers a
+//! solid angle of A · 8 / J, J = (1 − u)² + u² ∈ [½, 1] ([`solid_angle_per_area`]), so a
+//! density on the square is one in solid angle times 8/J. A [`Quadtree`] cuts the square
+//! into quadrants, finer where more light arrived; a [`Directions`] is one with a
+//! probability per quadrant, sampled by descending and reporting the product of the choices
+//! as its exact density. Quadrants are numbered `x ≥ ½` + 2·(`y ≥ ½`).
 
 use crate::math::{Vec2, Vec3A};
 
-/// Deepest level a quadrant may be cut to (2⁻¹⁶ of the square's side).
+/// Deepest level a quadrant may be cut to (2⁻⁸ of the square's side).
 pub const MAX_DEPTH: u32 = 8;
 /// A quadrant holding more than this share of a region's light is cut in four
 /// (Müller et al.'s ρ).
 pub const SPLIT_SHARE: f64 = 0.01;
 
+/// The largest value below 1 a square coordinate keeps.
+const BELOW_ONE: f32 = 1.0 - f32::EPSILON / 2.0;
+
 /// A direction's point on the unit square (see the module's documentation).
 #[inline]
 pub fn to_square(d: Vec3A) -> Vec2 {
     let x = ((d.z + 1.0) * 0.5).clamp(0.0, 1.0);
-    let mut y = d.y.atan2(d.x) * (1.0 / TAU);
-    if y < 0.0 {
-        y += 1.0;
-    }
-    Vec2::new(x, y.min(1.0 - f32::EPSILON / 2.0))
+    let (a, b) = (d.x, d.y);
+    let sum = a.abs() + b.abs();
+    // The diamond angle: quadrant by the signs, then the share of the second coordinate.
+    let t = if sum == 0.0 {
+        0.0
+    } else if b >= 0.0 {
+        if a > 0.0 { b / sum } else { 1.0 - a / sum }
+    } else if a < 0.0 {
+        2.0 - b / sum
+    } else {
+        3.0 + a / sum
+    };
+    Vec2::new(x, (t * 0.25).min(BELOW_ONE))
 }
 
 /// The direction of a point on the unit square.
@@ -33,8 +46,26 @@ pub fn to_square(d: Vec3A) -> Vec2 {
 pub fn from_square(s: Vec2) -> Vec3A {
     let cos = 2.0 * s.x - 1.0;
     let sin = (1.0 - cos * cos).max(0.0).sqrt();
-    let (sp, cp) = (TAU * s.y).sin_cos();
-    Vec3A::new(sin * cp, sin * sp, cos)
+    let t = 4.0 * s.y;
+    let k = (t as u32).min(3);
+    let u = t - k as f32;
+    let norm = sin / ((1.0 - u) * (1.0 - u) + u * u).sqrt();
+    let (a, b) = ((1.0 - u) * norm, u * norm);
+    let (x, y) = match k {
+        0 => (a, b),
+        1 => (-b, a),
+        2 => (-a, -b),
+        _ => (b, -a),
+    };
+    Vec3A::new(x, y, cos)
+}
+
+/// The solid angle per unit area of the square at `s` (8/J, see the module's documentation).
+#[inline]
+pub fn solid_angle_per_area(s: Vec2) -> f32 {
+    let t = 4.0 * s.y;
+    let u = t - (t as u32).min(3) as f32;
+    8.0 / ((1.0 - u) * (1.0 - u) + u * u)
 }
 
 /// The quadrant of `s` in a node and `s` within it, rescaled to the unit square.
@@ -43,7 +74,7 @@ fn quadrant(s: Vec2) -> (usize, Vec2) {
     let (qx, qy) = (s.x >= 0.5, s.y >= 0.5);
     let q = qx as usize + 2 * qy as usize;
     let inner = Vec2::new(2.0 * s.x - qx as u32 as f32, 2.0 * s.y - qy as u32 as f32);
-    (q, inner.min(Vec2::splat(1.0 - f32::EPSILON / 2.0)))
+    (q, inner.min(Vec2::splat(BELOW_ONE)))
 }
 
 /// How a region's directions are cut: node 0 the whole square, `children[n][q]` the node
@@ -193,26 +224,27 @@ impl Directions {
             density *= 4.0 * p[q];
             size *= 0.5;
             origin += Vec2::new(column as f32, up as u32 as f32) * size;
-            u = Vec2::new(ux, uy).clamp(Vec2::ZERO, Vec2::splat(1.0 - f32::EPSILON / 2.0));
+            u = Vec2::new(ux, uy).clamp(Vec2::ZERO, Vec2::splat(BELOW_ONE));
             match self.nodes[node].children[q] {
                 0 => break,
                 c => node = c as usize,
             }
         }
-        let s = (origin + u * size).min(Vec2::splat(1.0));
-        (from_square(s), density / (4.0 * PI))
+        let s = (origin + u * size).min(Vec2::splat(BELOW_ONE));
+        (from_square(s), density / solid_angle_per_area(s))
     }
 
     /// The solid-angle density of [`sample`](Self::sample) returning `d` (unit).
     #[inline]
     pub fn pdf(&self, d: Vec3A) -> f32 {
-        let (mut node, mut density, mut s) = (0usize, 1.0f32, to_square(d));
+        let square = to_square(d);
+        let (mut node, mut density, mut s) = (0usize, 1.0f32, square);
         loop {
             let (q, inner) = quadrant(s);
             let n = &self.nodes[node];
             density *= 4.0 * n.p[q];
             match n.children[q] {
-                0 => return density / (4.0 * PI),
+                0 => return density / solid_angle_per_area(square),
                 c => (node, s) = (c as usize, inner),
             }
         }

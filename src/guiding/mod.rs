@@ -22,7 +22,7 @@ mod directions;
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
-pub use directions::{Directions, Quadtree, from_square, to_square};
+pub use directions::{Directions, Quadtree, from_square, solid_angle_per_area, to_square};
 
 use crate::math::{Fixed, Vec3A};
 
@@ -47,6 +47,8 @@ const RECORD_LIMIT: f64 = (1u64 << 23) as f64;
 /// normal's largest component), so that a floor and a wall or the two sides of a glass
 /// sheet in one region do not share what they learn.
 pub const SIDES: usize = 6;
+/// Deepest level of the k-d tree (the bits of a [`Space::key`]).
+const MAX_REGION_DEPTH: u32 = 63;
 /// An entry of [`Regions`] that is a region's index rather than a node's.
 const LEAF: u32 = 1 << 31;
 
@@ -77,10 +79,14 @@ impl Space {
         Self { min: center - Vec3A::splat(radius), scale: 0.5 / radius }
     }
 
-    /// Where `p` lies in the unit cube (clamped into it).
+    /// Where `p` lies in the unit cube (clamped into it), as the Morton code of its
+    /// coordinates on a 2²¹ grid, x's bit first: bit 62 − d is the side of the k-d tree's
+    /// level-d cut it lies on.
     #[inline]
-    fn unit(&self, p: Vec3A) -> Vec3A {
-        ((p - self.min) * self.scale).clamp(Vec3A::ZERO, Vec3A::splat(1.0 - f32::EPSILON))
+    fn key(&self, p: Vec3A) -> u64 {
+        let q = ((p - self.min) * (self.scale * (1u32 << 21) as f32))
+            .clamp(Vec3A::ZERO, Vec3A::splat(((1u32 << 21) - 1) as f32));
+        crate::math::morton3(q.z as u32, q.y as u32, q.x as u32)
     }
 }
 
@@ -98,15 +104,13 @@ impl Regions {
         Self { root: LEAF, nodes: Vec::new(), count: 1 }
     }
 
-    /// The region holding the unit-cube point `u`.
+    /// The region holding the point of Morton code `key` ([`Space::key`]).
     #[inline]
-    fn locate(&self, mut u: Vec3A) -> usize {
-        let (mut entry, mut axis) = (self.root, 0);
+    fn locate(&self, key: u64) -> usize {
+        let (mut entry, mut depth) = (self.root, 0);
         while entry & LEAF == 0 {
-            let upper = u[axis] >= 0.5;
-            u[axis] = 2.0 * u[axis] - upper as u32 as f32;
-            entry = self.nodes[entry as usize][upper as usize];
-            axis = (axis + 1) % 3;
+            entry = self.nodes[entry as usize][(key >> (62 - depth)) as usize & 1];
+            depth += 1;
         }
         (entry & !LEAF) as usize
     }
@@ -116,20 +120,28 @@ impl Regions {
     fn split(&self, halvings: impl Fn(usize) -> u32) -> (Regions, Vec<usize>) {
         let mut out = Regions { root: 0, nodes: Vec::new(), count: 0 };
         let mut origin = Vec::new();
-        out.root = out.copy(self, self.root, &halvings, &mut origin);
+        out.root = out.copy(self, self.root, 0, &halvings, &mut origin);
         (out, origin)
     }
 
-    fn copy(&mut self, old: &Regions, entry: u32, halvings: &impl Fn(usize) -> u32, origin: &mut Vec<usize>) -> u32 {
+    fn copy(
+        &mut self,
+        old: &Regions,
+        entry: u32,
+        depth: u32,
+        halvings: &impl Fn(usize) -> u32,
+        origin: &mut Vec<usize>,
+    ) -> u32 {
         if entry & LEAF != 0 {
             let r = (entry & !LEAF) as usize;
-            return self.halve(r, halvings(r), origin);
+            // A key has 63 bits: no cell is cut finer than that.
+            return self.halve(r, halvings(r).min(MAX_REGION_DEPTH - depth), origin);
         }
         let [a, b] = old.nodes[entry as usize];
         let node = self.nodes.len();
         self.nodes.push([0; 2]);
-        let a = self.copy(old, a, halvings, origin);
-        let b = self.copy(old, b, halvings, origin);
+        let a = self.copy(old, a, depth + 1, halvings, origin);
+        let b = self.copy(old, b, depth + 1, halvings, origin);
         self.nodes[node] = [a, b];
         node as u32
     }
@@ -162,7 +174,7 @@ impl Guide {
     /// The distribution learned for the region holding `p`, on the side normal `n` faces.
     #[inline]
     pub fn at(&self, p: Vec3A, n: Vec3A) -> Option<&Directions> {
-        self.directions[self.regions.locate(self.space.unit(p)) * SIDES + side(n)].as_ref()
+        self.directions[self.regions.locate(self.space.key(p)) * SIDES + side(n)].as_ref()
     }
 }
 
@@ -206,7 +218,7 @@ impl Recorder<'_> {
         if self.sums.counts.is_empty() {
             *self.sums = Sums { light: vec![0; r.quadrants], counts: vec![0; r.trees.len()] };
         }
-        let slot = r.regions.locate(r.space.unit(p)) * SIDES + side(n);
+        let slot = r.regions.locate(r.space.key(p)) * SIDES + side(n);
         self.sums.counts[slot] += 1;
         let q = Fixed::of(value as f64, RECORD_BITS, RECORD_LIMIT).max(0) as u64;
         if q > 0 {

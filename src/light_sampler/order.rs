@@ -19,15 +19,6 @@ pub struct SpatialOrder {
     slot: Vec<u32>,
 }
 
-/// Spreads the low 10 bits of `v` to every third bit.
-fn spread3(mut v: u32) -> u32 {
-    v &= 0x3ff;
-    v = (v | (v << 16)) & 0x0300_00ff;
-    v = (v | (v << 8)) & 0x0300_f00f;
-    v = (v | (v << 4)) & 0x030c_30c3;
-    (v | (v << 2)) & 0x0924_9249
-}
-
 impl SpatialOrder {
     /// The order of `lights`.
     pub fn new(lights: &[Light]) -> Self {
@@ -44,7 +35,7 @@ impl SpatialOrder {
                 return u64::MAX;
             }
             let q = ((b.centroid() - lo) * scale).max(Vec3A::ZERO).min(Vec3A::splat(1023.0));
-            (spread3(q.x as u32) | (spread3(q.y as u32) << 1) | (spread3(q.z as u32) << 2)) as u64
+            crate::math::morton3(q.x as u32, q.y as u32, q.z as u32)
         };
         let mut order: Vec<u32> = (0..bounds.len() as u32).collect();
         order.sort_by_key(|&i| (morton(&bounds[i as usize]), i));

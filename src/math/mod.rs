@@ -33,6 +33,21 @@ pub fn point_bounds(points: impl IntoIterator<Item = Vec3A>) -> (Vec3A, Vec3A) {
     points.into_iter().fold((Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN)), |(lo, hi), p| (lo.min(p), hi.max(p)))
 }
 
+/// The Morton code of three coordinates of up to 21 bits: `a`'s bits at positions 0, 3, 6 …,
+/// `b`'s at 1, 4, 7 …, `c`'s at 2, 5, 8 … (so `c`'s highest bit is the code's highest).
+#[inline]
+pub fn morton3(a: u32, b: u32, c: u32) -> u64 {
+    fn spread(v: u32) -> u64 {
+        let mut x = v as u64 & 0x1f_ffff;
+        x = (x | x << 32) & 0x001f_0000_0000_ffff;
+        x = (x | x << 16) & 0x001f_0000_ff00_00ff;
+        x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
+        x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
+        (x | x << 2) & 0x1249_2492_4924_9249
+    }
+    spread(a) | spread(b) << 1 | spread(c) << 2
+}
+
 /// `acos` clamped to its domain, so that dot products a hair above 1 give 0, not NaN.
 ///
 /// A polynomial (Abramowitz & Stegun 4.4.46, absolute error ≤ 2·10⁻⁸ before f32 rounding)
@@ -73,6 +88,16 @@ pub fn power_heuristic(pdf_a: f32, pdf_b: f32) -> f32 {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn morton_codes_interleave_the_bits_of_each_coordinate() {
+        assert_eq!(super::morton3(1, 0, 0), 1);
+        assert_eq!(super::morton3(0, 1, 0), 2);
+        assert_eq!(super::morton3(0, 0, 1), 4);
+        assert_eq!(super::morton3(0, 0, 1 << 20), 1 << 62);
+        assert_eq!(super::morton3(0b11, 0b01, 0b10), 0b101_011);
+        assert_eq!(super::morton3(u32::MAX, u32::MAX, u32::MAX), (1 << 63) - 1);
+    }
+
     use super::*;
 
     #[test]

@@ -3,12 +3,11 @@
 //! guided renders are the unguided picture (the same at any thread count and split).
 
 use crate::common::{chi_square, sidak};
-use myriad::guiding::{Directions, Guiding, Quadtree, from_square, to_square};
+use myriad::guiding::{Directions, Guiding, Quadtree, from_square, solid_angle_per_area, to_square};
 use myriad::integrator::guided::Scattering;
 use myriad::material::{Bsdf, Diffuse, Principled, ShadingPoint};
 use myriad::math::{Rgb, Vec2, Vec3A};
 use myriad::sampling::SampleStream;
-use std::f64::consts::PI;
 
 /// Bins along each side of the square directions are counted in (a power of two: each bin
 /// holds whole quadrants or lies in one).
@@ -53,7 +52,7 @@ fn directions_match(label: &str, draw: impl Fn(usize) -> Option<Vec3A>, pdf: imp
             observed[bin] += 1.0;
         }
     }
-    // The density integrated over each bin (the square's area is 4π of solid angle).
+    // The density integrated over each bin (in solid angle: `solid_angle_per_area`).
     const SUB: usize = 16;
     let expected: Vec<f64> = (0..BINS * BINS)
         .map(|bin| {
@@ -62,9 +61,9 @@ fn directions_match(label: &str, draw: impl Fn(usize) -> Option<Vec3A>, pdf: imp
             for j in 0..SUB * SUB {
                 let s = Vec2::new((bx * SUB + j % SUB) as f32 + 0.5, (by * SUB + j / SUB) as f32 + 0.5)
                     / (BINS * SUB) as f32;
-                sum += pdf(from_square(s)) as f64;
+                sum += pdf(from_square(s)) as f64 * solid_angle_per_area(s) as f64;
             }
-            sum * 4.0 * PI / (BINS * BINS * SUB * SUB) as f64 * DRAWS as f64
+            sum / (BINS * BINS * SUB * SUB) as f64 * DRAWS as f64
         })
         .collect();
     let total: f64 = expected.iter().sum();
@@ -81,10 +80,11 @@ fn a_learned_distribution_samples_what_its_density_says() {
     // would be exact; this grid is close).
     let n = 512;
     let integral: f64 = (0..n * n)
-        .map(|i| d.pdf(from_square(Vec2::new((i % n) as f32 + 0.5, (i / n) as f32 + 0.5) / n as f32)) as f64)
+        .map(|i| {
+            let s = Vec2::new((i % n) as f32 + 0.5, (i / n) as f32 + 0.5) / n as f32;
+            d.pdf(from_square(s)) as f64 * solid_angle_per_area(s) as f64
+        })
         .sum::<f64>()
-        * 4.0
-        * PI
         / (n * n) as f64;
     assert!((integral - 1.0).abs() < 0.01, "integral {integral}");
     // Each draw's own density is the one `pdf` reports for its direction.
