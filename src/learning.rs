@@ -31,8 +31,8 @@ pub use crate::light_sampler::LEARN_UNTIL;
 pub struct Seen {
     /// Light samples at shading points, for a light sampler that learns.
     light: Option<Observations>,
-    /// The light paths brought back through their vertices, for path guiding (one set of
-    /// atomic sums every worker adds to).
+    /// The light paths brought back through their vertices, for path guiding (shared by a
+    /// pass's workers, each thread adding to its own sums).
     guide: Option<Arc<Records>>,
 }
 
