@@ -51,6 +51,12 @@ class MyriadSettings(bpy.types.PropertyGroup):
         default=0.0,
         min=0.0,
     )
+    guiding: bpy.props.BoolProperty(
+        name="Path Guiding",
+        description="Paths learn where light comes from and go there more often (light through glass, "
+        "glossy bounces); unbiased, but at equal time it does not pay on most scenes yet",
+        default=False,
+    )
     seed: bpy.props.IntProperty(
         name="Seed", description="Seed of every random number: the same seed gives the same image", default=0, min=0
     )

@@ -48,6 +48,7 @@ class MYRIAD_PT_render(bpy.types.Panel):
         col.prop(settings, "max_depth")
         col.prop(settings, "clamp_direct")
         col.prop(settings, "clamp_indirect")
+        col.prop(settings, "guiding")
         col.prop(settings, "seed")
         layout.prop(settings, "binary")
 

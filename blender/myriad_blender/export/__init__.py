@@ -70,6 +70,7 @@ def export_scene(depsgraph, folder, settings):
             sampler=settings.sampler,
             seed=str(settings.seed),
             clamp=_clamp(settings),
+            guiding="true" if settings.guiding else None,
         ),
         objects=objects,
         lights=light_list,
