@@ -5,7 +5,10 @@
 #                                 behind walls), five samplers at equal time (2 s each),
 #                                 renders above their error maps
 #   docs/images/compare-page.png  that comparison's report.html in headless Chromium
-# Needs Chromium for the last (Debian: apt-get install chromium). Takes about two minutes.
+#   docs/images/glass-guiding-{off,on}.png  tests/data/blender/glass.glb, 320×240, 64 spp,
+#                                 seed 2, without and with path guiding
+# Needs Chromium for compare-page.png (Debian: apt-get install chromium). Takes about two
+# minutes.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -q
@@ -19,6 +22,10 @@ mkdir -p docs/images
 "$myriad" compare scenes/offices.ron --samplers uniform,power,tree,learned,cells --time 2 --seeds 1 \
     --resolution 320x240 --reference-spp 1024 --out-dir "$work/compare" -q
 cp "$work/compare/contact-sheet.png" docs/images/samplers.png
+for guiding in off on; do
+    "$myriad" render tests/data/blender/glass.glb --resolution 320x240 --spp 64 --max-depth 9 --seed 2 \
+        --guiding "$guiding" -q -o "$work/glass-$guiding.exr" --png "docs/images/glass-guiding-$guiding.png"
+done
 
 chromium=$(command -v chromium || command -v chromium-browser || command -v google-chrome || true)
 if [ -z "$chromium" ]; then
@@ -30,4 +37,4 @@ fi
     --disable-background-networking --user-data-dir="$work/profile" --window-size=1200,900 \
     --force-device-scale-factor=1 --virtual-time-budget=15000 \
     --screenshot="$PWD/docs/images/compare-page.png" "file://$work/compare/report.html" 2>/dev/null
-echo "wrote docs/images/render.png, docs/images/samplers.png, docs/images/compare-page.png"
+echo "wrote docs/images/render.png, samplers.png, glass-guiding-off.png, glass-guiding-on.png, compare-page.png"
