@@ -114,11 +114,11 @@ impl fmt::Display for InfoReport {
         }
         writeln!(
             f,
-            "guiding      {} (--guiding): learns until {} spp, regions halved past {} records per √spp, at most {}",
+            "guiding      {} (--guiding): learns until {} spp, regions halved past {} records per √spp, at most {} with these threads",
             crate::settings::on_off(r.render.guiding.unwrap_or(crate::commands::settings::DEFAULT_GUIDING)),
             crate::guiding::GUIDE_UNTIL,
             crate::guiding::SPLIT_SAMPLES,
-            human_bytes(crate::guiding::MAX_BYTES as u64)
+            human_bytes(crate::guiding::max_bytes(rayon::current_num_threads()) as u64)
         )?;
         for (name, what) in &r.extensions {
             writeln!(f, "extension    {name}: {what}")?;

@@ -33,11 +33,17 @@ pub const GUIDE_UNTIL: u32 = 64;
 pub const SPLIT_SAMPLES: f64 = 4000.0;
 /// Most quadtree nodes over all regions.
 pub const MAX_NODES: usize = 1 << 18;
-/// Bytes a quadtree node takes while it is both learned and recorded into: 32 of
-/// distribution, 16 of cut and 32 of records.
-const NODE_BYTES: usize = 80;
-/// The most guiding holds.
-pub const MAX_BYTES: usize = MAX_NODES * NODE_BYTES;
+/// Bytes of a quadtree node's cut (its four children).
+const CUT_BYTES: usize = 16;
+/// Bytes of a quadtree node's learned distribution.
+const DISTRIBUTION_BYTES: usize = 32;
+/// Bytes of a quadtree node's sums, per worker thread that records.
+const SUMS_BYTES: usize = 32;
+
+/// The most guiding holds when `threads` worker threads record.
+pub fn max_bytes(threads: usize) -> usize {
+    MAX_NODES * (CUT_BYTES + DISTRIBUTION_BYTES + SUMS_BYTES * threads)
+}
 /// Fractional bits of a recorded value.
 const RECORD_BITS: i32 = 20;
 /// Largest value a record keeps (a firefly's weight in what is learned is capped; the image
@@ -263,7 +269,7 @@ impl Records {
     fn bytes(&self) -> usize {
         let nodes: usize = self.trees.iter().map(Quadtree::nodes).sum();
         let filled = self.slots.iter().filter(|s| !s.lock().unwrap_or_else(|e| e.into_inner()).counts.is_empty());
-        nodes * (NODE_BYTES - 32) * filled.count().max(1) + self.trees.len() * 8 + self.regions.nodes.len() * 8
+        nodes * (CUT_BYTES + SUMS_BYTES * filled.count()) + self.trees.len() * 8 + self.regions.nodes.len() * 8
     }
 }
 
