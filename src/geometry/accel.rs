@@ -24,23 +24,8 @@ use obvhs::{
 };
 
 use super::triangles::Triangles;
-use super::{Ray, traverse};
+use super::{RawHit, Ray, traverse};
 use crate::math::{Mat3, Mat4, Vec3A};
-
-/// The raw result of a closest-hit query.
-#[derive(Clone, Copy, Debug)]
-pub struct RawHit {
-    /// Index of the instance hit.
-    pub instance: u32,
-    /// Triangle within the instance's BLAS (BVH order).
-    pub tri: u32,
-    /// Ray parameter.
-    pub t: f32,
-    /// Barycentric weight of vertex 1.
-    pub b1: f32,
-    /// Barycentric weight of vertex 2.
-    pub b2: f32,
-}
 
 /// An obvhs ray. Direction components of −0.0 are turned into +0.0: obvhs takes the ray's
 /// octant from `d < 0` (false for −0.0) but its inverse from the sign bit (−∞-like for

@@ -14,7 +14,7 @@ use std::ffi::{c_char, c_void};
 use std::ptr;
 
 use super::Ray;
-use super::accel::RawHit;
+use super::hit::RawHit;
 use crate::math::{Mat4, Vec3A};
 
 type RtcDevice = *mut c_void;

@@ -1,6 +1,22 @@
-//! What a closest-hit query reports about the surface it found.
+//! What a closest-hit query reports: the tracer's raw hit ([`RawHit`], the same from every
+//! tracer) and the surface it found ([`SurfaceHit`]).
 
 use crate::math::{Vec2, Vec3A};
+
+/// The raw result of a closest-hit query.
+#[derive(Clone, Copy, Debug)]
+pub struct RawHit {
+    /// Index of the instance hit.
+    pub instance: u32,
+    /// Triangle within the instance's BLAS (BVH order).
+    pub tri: u32,
+    /// Ray parameter.
+    pub t: f32,
+    /// Barycentric weight of vertex 1.
+    pub b1: f32,
+    /// Barycentric weight of vertex 2.
+    pub b2: f32,
+}
 
 /// A triangle of a [`Geometry`](super::Geometry): its instance and its slot in that
 /// instance's BLAS.

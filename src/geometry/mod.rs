@@ -15,8 +15,8 @@ mod offset;
 mod traverse;
 mod triangles;
 
-pub use accel::{Accel, AccelStats, Blas, BoxBvh, Instance, RawHit, TracerKind};
-pub use hit::{SurfaceHit, TriangleRef};
+pub use accel::{Accel, AccelStats, Blas, BoxBvh, Instance, TracerKind};
+pub use hit::{RawHit, SurfaceHit, TriangleRef};
 pub use mesh::{Attributes, Geometry, GeometryBuilder, NO_LIGHT, TriangleInfo, radial_tangents};
 pub use offset::offset_ray_origin;
 
