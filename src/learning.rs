@@ -8,7 +8,8 @@
 //! since. What is learned is therefore a function of the samples alone, not of the thread
 //! count or how passes split them; a render of a sample range `a..b` needs the state at `a`,
 //! which [`Learning`]'s owner makes by rendering samples `0..min(a, until)` first. The light
-//! sampler learns up to [`LEARN_UNTIL`] spp, path guiding up to [`GUIDE_UNTIL`].
+//! sampler learns up to [`LEARN_UNTIL`] spp, path guiding up to [`GUIDE_UNTIL`]. The last
+//! pass of a fixed budget records nothing: what it would teach, nothing would use.
 //!
 //! The integrator writes into a [`Seen`] through its `record_*` methods; the render loop
 //! asks [`Learning`] how long a pass may be, hands it each pass's [`Seen`], and renders
@@ -17,7 +18,7 @@
 
 use std::sync::Arc;
 
-pub use crate::guiding::GUIDE_UNTIL;
+use crate::guiding::GUIDE_UNTIL;
 use crate::guiding::{Guide, GuideStats, Guiding, Records};
 use crate::light::LightId;
 use crate::light_sampler::{LearnedStats, LightStrategy, Observations, ShadingContext};
@@ -153,6 +154,11 @@ impl Learning {
             }
             self.learned_at = end;
         }
+    }
+
+    /// The samples per pixel the state last learned at (0: not yet).
+    pub fn learned_at(&self) -> u32 {
+        self.learned_at
     }
 
     /// What the light sampler has learned so far.

@@ -161,6 +161,9 @@ pub struct RenderStats {
     pub learned: Option<LearnedStats>,
     /// What path guiding learned (its memory, the time learning took).
     pub guide: Option<GuideStats>,
+    /// The samples per pixel the render last learned at (light sampler or guiding; 0 when
+    /// nothing learned).
+    pub learned_at: u32,
     /// Whether the user stopped the render ([`Stop::AfterPass`]: the film holds the passes
     /// finished; [`Stop::Now`]: it is incomplete and must not be written).
     pub stopped: Stop,
@@ -176,6 +179,7 @@ impl Default for RenderStats {
             non_finite_samples: 0,
             learned: None,
             guide: None,
+            learned_at: 0,
             stopped: Stop::No,
         }
     }
@@ -441,6 +445,7 @@ impl<'a> Progressive<'a> {
             non_finite_samples: self.non_finite,
             learned: self.learning.as_ref().and_then(Learning::light_stats),
             guide: self.learning.as_ref().and_then(Learning::guide_stats),
+            learned_at: self.learning.as_ref().map_or(0, Learning::learned_at),
             stopped,
         };
         RenderOutput { film: self.film, stats }

@@ -339,7 +339,7 @@ impl fmt::Display for RenderReport {
                 "learned    {} cells from {} light samples (passes up to {} spp), {} in {}",
                 l.cells,
                 l.samples,
-                crate::light_sampler::LEARN_UNTIL.min(st.spp),
+                crate::light_sampler::LEARN_UNTIL.min(st.learned_at),
                 human_bytes(l.memory_bytes as u64),
                 human_duration(l.learning_time)
             )?;
@@ -351,7 +351,7 @@ impl fmt::Display for RenderReport {
                 g.regions,
                 g.nodes,
                 g.records,
-                crate::learning::GUIDE_UNTIL.min(st.spp),
+                st.learned_at,
                 human_bytes(g.memory_bytes as u64),
                 human_duration(g.learning_time)
             )?;

@@ -5,8 +5,9 @@
 //! midpoint splits, a learned [`Directions`] per region and side), [`Records`], what paths
 //! record into (the next cut, with a fixed-point light sum per leaf quadrant and a sample
 //! count per region and side, each worker thread into its own, added up at the end: integer
-//! sums, so neither the thread count nor the order of the records changes a bit), and [`Guiding`], the state that turns one iteration's records
-//! into the next [`Guide`] and the next cut. An iteration is a learning pass of
+//! sums, so neither the thread count nor the order of the records changes a bit), and
+//! [`Guiding`], the state that turns one iteration's records into the next [`Guide`] and
+//! the next cut. An iteration is a learning pass of
 //! [`crate::learning`] (samples 0..1, 1..2, 2..4, … up to its last power of two); the
 //! distributions a pass samples from are a function of the samples before it alone.
 //!
@@ -39,11 +40,6 @@ const CUT_BYTES: usize = 16;
 const DISTRIBUTION_BYTES: usize = 32;
 /// Bytes of a quadtree node's sums, per worker thread that records.
 const SUMS_BYTES: usize = 32;
-
-/// The most guiding holds when `threads` worker threads record.
-pub fn max_bytes(threads: usize) -> usize {
-    MAX_NODES * (CUT_BYTES + DISTRIBUTION_BYTES + SUMS_BYTES * threads)
-}
 /// Fractional bits of a recorded value.
 const RECORD_BITS: i32 = 20;
 /// Largest value a record keeps (a firefly's weight in what is learned is capped; the image
@@ -57,6 +53,13 @@ pub const SIDES: usize = 6;
 const MAX_REGION_DEPTH: u32 = 63;
 /// An entry of [`Regions`] that is a region's index rather than a node's.
 const LEAF: u32 = 1 << 31;
+/// Cells of the grid a point is placed on along each side of the cube (21 bits).
+const GRID: u32 = 1 << 21;
+
+/// The most guiding holds when `threads` worker threads record.
+pub fn max_bytes(threads: usize) -> usize {
+    MAX_NODES * (CUT_BYTES + DISTRIBUTION_BYTES + SUMS_BYTES * threads)
+}
 
 /// Which of the [`SIDES`] a surface of normal `n` faces.
 #[inline]
@@ -90,8 +93,7 @@ impl Space {
     /// level-d cut it lies on.
     #[inline]
     fn key(&self, p: Vec3A) -> u64 {
-        let q = ((p - self.min) * (self.scale * (1u32 << 21) as f32))
-            .clamp(Vec3A::ZERO, Vec3A::splat(((1u32 << 21) - 1) as f32));
+        let q = ((p - self.min) * (self.scale * GRID as f32)).clamp(Vec3A::ZERO, Vec3A::splat((GRID - 1) as f32));
         crate::math::morton3(q.z as u32, q.y as u32, q.x as u32)
     }
 }
@@ -209,6 +211,13 @@ struct Sums {
     counts: Vec<u64>,
 }
 
+impl Sums {
+    /// Zeros for `records`' cut.
+    fn zero(records: &Records) -> Self {
+        Sums { light: vec![0; records.quadrants], counts: vec![0; records.trees.len()] }
+    }
+}
+
 /// A worker thread's hold on its sums, for the records of one path.
 pub struct Recorder<'a> {
     records: &'a Records,
@@ -222,7 +231,7 @@ impl Recorder<'_> {
     pub fn record(&mut self, p: Vec3A, n: Vec3A, wi: Vec3A, value: f32) {
         let r = &self.records;
         if self.sums.counts.is_empty() {
-            *self.sums = Sums { light: vec![0; r.quadrants], counts: vec![0; r.trees.len()] };
+            *self.sums = Sums::zero(r);
         }
         let slot = r.regions.locate(r.space.key(p)) * SIDES + side(n);
         self.sums.counts[slot] += 1;
@@ -252,7 +261,7 @@ impl Records {
 
     /// Every thread's sums added up: integer sums, whatever thread recorded what.
     fn total(&self) -> Sums {
-        let mut total = Sums { light: vec![0; self.quadrants], counts: vec![0; self.trees.len()] };
+        let mut total = Sums::zero(self);
         for slot in &self.slots {
             let sums = slot.lock().unwrap_or_else(|e| e.into_inner());
             for (t, s) in total.light.iter_mut().zip(&sums.light) {
@@ -265,7 +274,7 @@ impl Records {
         total
     }
 
-    /// Bytes it holds.
+    /// Bytes it holds (the sums of the threads that recorded).
     fn bytes(&self) -> usize {
         let nodes: usize = self.trees.iter().map(Quadtree::nodes).sum();
         let filled = self.slots.iter().filter(|s| !s.lock().unwrap_or_else(|e| e.into_inner()).counts.is_empty());
@@ -322,6 +331,7 @@ impl Guiding {
         let start = Instant::now();
         let old = &self.records;
         let Sums { light, counts } = old.total();
+        let recorded_bytes = old.bytes();
         let sums: Vec<Vec<[u64; 4]>> =
             old.trees.iter().zip(&old.offsets).map(|(t, &o)| t.sums(&light[o..][..4 * t.nodes()])).collect();
         let directions: Vec<Option<Directions>> =
@@ -354,7 +364,8 @@ impl Guiding {
             regions: learned.clone().count(),
             nodes: learned.clone().map(Directions::nodes).sum(),
             records: self.stats.records + counts.iter().sum::<u64>(),
-            memory_bytes: learned.map(Directions::bytes).sum::<usize>() + self.records.bytes(),
+            // What the iteration's records held and what was learned from them: the most at once.
+            memory_bytes: learned.map(Directions::bytes).sum::<usize>() + recorded_bytes,
             learning_time: self.stats.learning_time + start.elapsed(),
         };
     }
