@@ -120,6 +120,19 @@ impl fmt::Display for InfoReport {
             crate::guiding::SPLIT_SAMPLES,
             human_bytes(crate::guiding::max_bytes(rayon::current_num_threads()) as u64)
         )?;
+        let smooth: Vec<String> =
+            s.materials.iter().filter(|m| m.smooth_glass().is_some()).map(|m| format!("'{}'", m.name)).collect();
+        writeln!(
+            f,
+            "caustics     {}",
+            if s.caustics {
+                format!("light from emissive surfaces through smooth glass ({}) is solved for", smooth.join(", "))
+            } else if smooth.is_empty() {
+                "no smooth solid glass: nothing to solve for".into()
+            } else {
+                "no emissive surface to solve for through smooth glass".into()
+            }
+        )?;
         for (name, what) in &r.extensions {
             writeln!(f, "extension    {name}: {what}")?;
         }

@@ -205,6 +205,18 @@ impl GeometryBuilder {
     }
 }
 
+/// A triangle's corners in world space with their shading normals (not normalised) and its
+/// front normal.
+#[derive(Clone, Copy, Debug)]
+pub struct Corners {
+    /// The corners.
+    pub p: [Vec3A; 3],
+    /// The shading normal at each corner.
+    pub n: [Vec3A; 3],
+    /// The unit normal of the triangle's front.
+    pub n_geom: Vec3A,
+}
+
 /// All triangles of a scene, ready for ray queries.
 pub struct Geometry {
     /// The BVHs and the triangles' positions.
@@ -304,6 +316,25 @@ impl Geometry {
             material: info.material,
             light: (info.light != NO_LIGHT).then_some(info.light),
         })
+    }
+
+    /// `triangle`'s corners and their shading normals in world space (every corner the
+    /// triangle's front normal where the mesh is flat-shaded), and its front normal: what a
+    /// walk over the surface (manifold next-event estimation) interpolates between.
+    pub fn corners(&self, triangle: TriangleRef) -> Corners {
+        let inst = &self.accel.instances()[triangle.instance as usize];
+        let info = self.info(inst.blas, triangle.tri);
+        let p = world_vertices(inst, self.accel.blases()[inst.blas as usize].vertices(triangle.tri));
+        let n_geom = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
+        let n_geom = if inst.mirrored { -n_geom } else { n_geom };
+        let n = if info.smooth {
+            info.attr.map(|i| {
+                if inst.identity { self.normals[i as usize] } else { inst.normal_matrix * self.normals[i as usize] }
+            })
+        } else {
+            [n_geom; 3]
+        };
+        Corners { p, n, n_geom }
     }
 
     /// ∂p/∂u and ∂p/∂v of `triangle` in world space (zero without UVs or where its UV

@@ -17,7 +17,7 @@ mod triangles;
 
 pub use accel::{Accel, AccelStats, Blas, BoxBvh, Instance, TracerKind};
 pub use hit::{RawHit, SurfaceHit, TriangleRef};
-pub use mesh::{Attributes, Geometry, GeometryBuilder, NO_LIGHT, TriangleInfo, radial_tangents};
+pub use mesh::{Attributes, Corners, Geometry, GeometryBuilder, NO_LIGHT, TriangleInfo, radial_tangents};
 pub use offset::offset_ray_origin;
 
 use crate::math::Vec3A;

@@ -8,6 +8,7 @@
 
 pub mod direct;
 pub mod guided;
+pub mod mnee;
 pub mod path;
 pub mod timing;
 

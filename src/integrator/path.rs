@@ -9,6 +9,7 @@
 
 use super::direct::estimate_direct;
 use super::guided::Scattering;
+use super::mnee::GlassChain;
 use super::timing::timed;
 use super::transmittance;
 use super::{RayCounters, Tally};
@@ -146,14 +147,17 @@ fn bsdf_hit_weight(
 
 /// What the light emitting at `hit` (if it is on one) back along `dir` adds to a path of
 /// throughput `beta`, weighted against next-event estimation when the ray was found by BSDF
-/// sampling at `prev`.
+/// sampling at `prev`, or against next-event estimation through glass when the path came
+/// along a `chain` of refractions from a receiver.
 #[inline]
+#[allow(clippy::too_many_arguments)]
 fn emitted(
     scene: &Scene,
     strategy: &LightStrategy,
     hit: &SurfaceHit,
     dir: Vec3A,
     prev: Option<Previous>,
+    chain: GlassChain,
     beta: Rgb,
     counters: &mut RayCounters,
 ) -> Rgb {
@@ -163,7 +167,11 @@ fn emitted(
     if le == Rgb::ZERO {
         return le;
     }
-    beta * le * bsdf_hit_weight(strategy, id, prev, |ctx| light.pdf_li(ctx.p, hit.p, hit.n_geom), counters)
+    let weight = match chain.weight(scene, strategy, hit, id, counters) {
+        Some(w) => w,
+        None => bsdf_hit_weight(strategy, id, prev, |ctx| light.pdf_li(ctx.p, hit.p, hit.n_geom), counters),
+    };
+    beta * le * weight
 }
 
 /// Russian roulette from [`RR_MIN_DEPTH`] on: a path survives with probability
@@ -224,6 +232,8 @@ impl Tracer<'_> {
         let mut prev: Option<Previous> = None;
         // The absorption of the glass the ray travels through (zero outside any).
         let mut medium = Rgb::ZERO;
+        // The refractions through smooth glass since the path last left a receiver.
+        let mut chain = GlassChain::default();
         // Whether path guiding learns from this path's vertices (`tally.trail`).
         let recording = tally.seen.guide_records().is_some();
         let mut depth = 0u32;
@@ -250,7 +260,7 @@ impl Tracer<'_> {
             if depth == 0 {
                 first_hit = Some(FirstHit::of(scene, &hit, wo));
             }
-            l += clamped(emitted(scene, strategy, &hit, ray.dir, prev, beta, counters), arriving);
+            l += clamped(emitted(scene, strategy, &hit, ray.dir, prev, chain, beta, counters), arriving);
             if depth == max_depth {
                 break;
             }
@@ -271,9 +281,13 @@ impl Tracer<'_> {
             );
             let sp = ShadingPoint::new(bsdf, hit.n_geom, n_shading, tangent, wo);
             let scattering = Scattering::new(sp, hit.p, guide);
+            let glass = if scene.caustics { material.smooth_glass() } else { None };
+            // Where next-event estimation also looks through smooth glass: off it, outside it.
+            let receiver = scene.caustics && glass.is_none() && medium == Rgb::ZERO;
 
             if !scene.lights.is_empty() {
-                let direct = beta * estimate_direct(scene, strategy, &scattering, hit.p, medium, stream, depth, tally);
+                let direct =
+                    beta * estimate_direct(scene, strategy, &scattering, hit.p, medium, receiver, stream, depth, tally);
                 l += clamped(direct, clamp.limit(depth >= 1));
             }
 
@@ -288,11 +302,17 @@ impl Tracer<'_> {
                 let entering = ray.dir.dot(hit.n_geom) < 0.0;
                 medium = if entering { material.absorption } else { Rgb::ZERO };
             }
-            prev = Some(Previous {
+            let left = Previous {
                 ctx: ShadingContext { p: hit.p, n: sp.selection_normal() },
                 bsdf_pdf: bs.pdf,
                 every_light: strategy.takes_every_light(sp.is_diffuse()),
-            });
+            };
+            chain = match glass {
+                _ if receiver => GlassChain::leaving(left.ctx, left.every_light, sp.n_geom, left.bsdf_pdf),
+                Some(_) if bs.wi.dot(sp.n_geom) < 0.0 => chain.through(hit.p),
+                _ => GlassChain::default(),
+            };
+            prev = Some(left);
             ray = Ray::new(sp.ray_origin(hit.p, bs.wi), bs.wi);
             depth += 1;
             if !survives_roulette(stream, depth, &mut beta) {

@@ -13,6 +13,20 @@ pub struct AreaEmission {
     pub two_sided: bool,
 }
 
+/// A point chosen by area on an emitting surface: what a connection that does not reach it
+/// along a straight line (manifold next-event estimation through glass) starts from.
+#[derive(Clone, Copy, Debug)]
+pub struct AreaPoint {
+    /// The point.
+    pub p: Vec3A,
+    /// The surface's unit front normal there.
+    pub n: Vec3A,
+    /// Density per unit area with which it was chosen.
+    pub pdf: f32,
+    /// What it emits.
+    pub emission: AreaEmission,
+}
+
 impl AreaEmission {
     /// Radiance leaving a surface of front normal `n` in direction `w` (unit).
     #[inline]

@@ -22,7 +22,7 @@ mod spot;
 mod sun;
 mod triangle;
 
-pub use area::AreaEmission;
+pub use area::{AreaEmission, AreaPoint};
 pub use area_light::{AreaLight, Spread};
 pub use bounds::{BoundsPacket, LANES, Lanes, LightBounds, cone_union};
 pub use distant::DistantLight;
@@ -115,6 +115,35 @@ impl Light {
             Light::Sphere(l) => l.sample_li(p, unit()),
             Light::Area(l) => l.sample_li(p, unit()),
             Light::Sun(l) => l.sample_li(unit()),
+        }
+    }
+
+    /// The point of an emissive triangle or quad that [`Light::sample_li`] would take for
+    /// `u`, with its density per area; `None` for every other light.
+    #[inline]
+    pub fn area_point(&self, u: [u64; 2], images: &[Image]) -> Option<AreaPoint> {
+        let unit = Vec2::new(unit_f32(u[0]), unit_f32(u[1]));
+        match self {
+            Light::Triangle(l) => Some(l.area_point(unit, images)),
+            Light::Quad(l) => Some(l.area_point(unit)),
+            _ => None,
+        }
+    }
+
+    /// Whether it is an emissive triangle or quad of the scene's geometry (what
+    /// [`Light::area_point`] samples).
+    #[inline]
+    pub fn is_surface(&self) -> bool {
+        matches!(self, Light::Triangle(_) | Light::Quad(_))
+    }
+
+    /// The density per unit area with which [`Light::area_point`] chooses its points.
+    #[inline]
+    pub fn area_pdf(&self) -> Option<f32> {
+        match self {
+            Light::Triangle(l) => Some(1.0 / l.area),
+            Light::Quad(l) => Some(1.0 / l.area),
+            _ => None,
         }
     }
 

@@ -5,7 +5,7 @@
 //! face): one light per lamp instead of two triangles halves the light count the samplers
 //! see, saves a level of the light tree, and keeps a lamp's pmf in one place.
 
-use super::{AreaEmission, LightSample};
+use super::{AreaEmission, AreaPoint, LightSample};
 use crate::math::{Vec2, Vec3A};
 
 /// One emissive parallelogram (world space).
@@ -68,8 +68,19 @@ impl QuadLight {
     /// Uniform-area sample seen from `p`.
     #[inline]
     pub fn sample_li(&self, p: Vec3A, u: Vec2) -> Option<LightSample> {
-        let q = self.p0 + self.e1 * u.x + self.e2 * u.y;
-        self.emission.sample_at(p, q, self.n, self.area)
+        let a = self.area_point(u);
+        self.emission.sample_at(p, a.p, self.n, self.area)
+    }
+
+    /// The point `u` chooses uniformly by area.
+    #[inline]
+    pub fn area_point(&self, u: Vec2) -> AreaPoint {
+        AreaPoint {
+            p: self.p0 + self.e1 * u.x + self.e2 * u.y,
+            n: self.n,
+            pdf: 1.0 / self.area,
+            emission: self.emission,
+        }
     }
 }
 

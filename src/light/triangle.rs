@@ -1,6 +1,6 @@
 //! Emissive triangle, sampled uniformly by area; optionally with an emission texture.
 
-use super::{AreaEmission, LightSample};
+use super::{AreaEmission, AreaPoint, LightSample};
 use crate::material::{Image, TextureRef, texture::mean_over_triangle};
 use crate::math::warp::square_to_triangle;
 use crate::math::{Rgb, Vec2, Vec3A};
@@ -74,15 +74,22 @@ impl TriangleLight {
         e.radiance_towards(self.n, w)
     }
 
-    /// Uniform-area sample seen from `p` (a texture reads `images`).
+    /// The point `u` chooses uniformly by area (a texture reads `images`).
     #[inline]
-    pub fn sample_li(&self, p: Vec3A, u: Vec2, images: &[Image]) -> Option<LightSample> {
+    pub fn area_point(&self, u: Vec2, images: &[Image]) -> AreaPoint {
         let [b0, b1, b2] = square_to_triangle(u);
         let q = self.v[0] * b0 + self.v[1] * b1 + self.v[2] * b2;
         let e = AreaEmission {
             radiance: self.radiance_at(images, |t| t.uv[0] * b0 + t.uv[1] * b1 + t.uv[2] * b2),
             ..self.emission
         };
-        e.sample_at(p, q, self.n, self.area)
+        AreaPoint { p: q, n: self.n, pdf: 1.0 / self.area, emission: e }
+    }
+
+    /// Uniform-area sample seen from `p` (a texture reads `images`).
+    #[inline]
+    pub fn sample_li(&self, p: Vec3A, u: Vec2, images: &[Image]) -> Option<LightSample> {
+        let a = self.area_point(u, images);
+        a.emission.sample_at(p, a.p, self.n, self.area)
     }
 }

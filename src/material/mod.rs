@@ -143,6 +143,41 @@ impl BsdfAt {
     }
 }
 
+/// Glass up to this roughness counts as smooth for next-event estimation through it: its
+/// lobe (GGX α = 0.01, under a degree wide) bends light so nearly along Snell's law that a
+/// connection solved for the exact refraction stands for it; what is lost is the blur such
+/// glass gives a caustic where the connection carries it. glass.glb's tinted ball
+/// (roughness 0.05) is such glass.
+pub const SMOOTH_GLASS_ROUGHNESS: f32 = 0.1;
+
+/// Smooth solid glass ([`Material::smooth_glass`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SmoothGlass {
+    /// Index of refraction inside.
+    pub ior: f32,
+    /// What one crossing lets through besides Fresnel (√base colour: two crossings tint by it).
+    pub tint: Rgb,
+    /// Absorption coefficient inside [1/m].
+    pub absorption: Rgb,
+}
+
+impl SmoothGlass {
+    /// What one crossing passes on towards a viewer at cosine `cos_o` to the normal, `eta`
+    /// being the far side's IOR over the viewer's: (1 − F)·tint, the smooth limit of the
+    /// Principled glass lobe (which, as Cycles', does not scale radiance by η²).
+    #[inline]
+    pub fn transmittance(&self, cos_o: f32, eta: f32) -> Rgb {
+        self.tint * (1.0 - fresnel::dielectric(cos_o, eta))
+    }
+
+    /// The probability that BSDF sampling refracts there rather than reflects (what the
+    /// Principled BSDF's sampling of its glass lobe gives in the smooth limit).
+    #[inline]
+    pub fn refraction_probability(&self, cos_o: f32, eta: f32) -> f32 {
+        1.0 - principled::reflect_probability(fresnel::dielectric(cos_o, eta), self.tint)
+    }
+}
+
 /// Surface appearance, as loaded (glTF metallic-roughness with emission and textures).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
@@ -280,6 +315,28 @@ impl Material {
             _ if self.anisotropy > 0.0 => "principled, anisotropic",
             _ => "principled",
         }
+    }
+
+    /// The surface as smooth solid glass, when that is all it is: no other lobe, nothing
+    /// textured, and roughness at most [`SMOOTH_GLASS_ROUGHNESS`]. Next-event estimation
+    /// solves for light that crosses such glass along Snell's law (`integrator::mnee`).
+    pub fn smooth_glass(&self) -> Option<SmoothGlass> {
+        let plain = self.metallic == 0.0
+            && self.transmission == 1.0
+            && !self.thin
+            && self.coat == 0.0
+            && self.sheen_color == Rgb::ZERO
+            && self.emission == Rgb::ZERO
+            && self.alpha == AlphaMode::Opaque
+            && self.base_color_texture.is_none()
+            && self.metallic_roughness_texture.is_none()
+            && self.normal_texture.is_none();
+        let b = self.base_color;
+        (plain && self.roughness <= SMOOTH_GLASS_ROUGHNESS).then(|| SmoothGlass {
+            ior: self.ior,
+            tint: Rgb::new(b.x.sqrt(), b.y.sqrt(), b.z.sqrt()),
+            absorption: self.absorption,
+        })
     }
 
     /// True when it reflects as Lambert's BSDF alone (whatever its textures say).

@@ -115,6 +115,14 @@ struct Glass {
     thin: bool,
 }
 
+/// The probability that sampling glass of crossing tint `tint` reflects at a facet of Fresnel
+/// `f` rather than refracting: in proportion to what each way carries.
+#[inline]
+pub fn reflect_probability(f: f32, tint: Rgb) -> f32 {
+    let t = (1.0 - f) * mean(tint);
+    if f + t > 0.0 { f / (f + t) } else { 1.0 }
+}
+
 /// `w` mirrored through the surface (z negated): a thin sheet's transmission of the
 /// reflection towards `w`.
 #[inline]
@@ -126,8 +134,7 @@ impl Glass {
     /// The probability of reflecting at a facet of Fresnel `f`.
     #[inline]
     fn reflect_probability(&self, f: f32) -> f32 {
-        let t = (1.0 - f) * mean(self.tint);
-        if f + t > 0.0 { f / (f + t) } else { 1.0 }
+        reflect_probability(f, self.tint)
     }
 
     /// The half vector of `wo` refracted to `wi` (on the upper side), with the Jacobian of

@@ -101,6 +101,10 @@ pub struct Scene {
     pub center: Vec3A,
     /// Radius of that sphere (sizes directional lights' power).
     pub radius: f32,
+    /// Whether next-event estimation looks for light through smooth glass
+    /// ([`crate::integrator::mnee`]): some material is smooth glass and some light an
+    /// emissive surface.
+    pub caustics: bool,
 }
 
 /// The lamps of a scene and the BVH over their shapes.

@@ -3,6 +3,7 @@
 mod bad_input;
 mod blender_addon;
 mod bsdfs;
+mod caustics;
 mod cli;
 mod common;
 mod compare;

@@ -1,0 +1,599 @@
+//! Manifold next-event estimation: light reaching a surface through smooth glass.
+//!
+//! A light sample on an emissive surface that only smooth solid glass
+//! ([`Material::smooth_glass`](crate::material::Material::smooth_glass)) blocks is not given
+//! up. The refractions the straight segment makes through the glass seed a chain of vertices
+//! that Newton's method walks over the glass until each one obeys Snell's law (Hanika, Droske
+//! and Fascione 2015, *Manifold next event estimation*; Cycles' shadow caustics). The light
+//! then arrives along the chain with the generalised geometry term G: the density of the
+//! direction it leaves the receiver in per unit area of the light, by the implicit function
+//! theorem on the chain's constraints.
+//!
+//! BSDF sampling finds the same paths (a receiver, 1 to [`MAX_CASTERS`] refractions through
+//! smooth glass, an emissive surface), and each strategy is good where the other is poor:
+//! where the glass focuses light (a caustic's bright core) G is large and varies fast over
+//! the light, and BSDF sampling hits the light easily; where it spreads light thin, only
+//! the solved connection finds it. So the two are weighed by the power heuristic, both
+//! densities per unit area of the light: the connection's is the light's selection pmf ×
+//! its point density, BSDF sampling's the receiver's density of the first direction × the
+//! probability of refracting at each vertex × G ([`GlassChain`] follows a path's chain to
+//! weigh the light it meets). What is lost: light along chains the connection does not
+//! find — one whose straight seed crosses anything but smooth glass, one Newton's method
+//! does not solve within [`MAX_ITERATIONS`], a second solution of the same seed — keeps
+//! only its BSDF-sampled share.
+//!
+//! Against Cycles: it serves emissive triangles and quads (Cycles only lamps; glTF scenes
+//! bring their light in meshes) and weighs by MIS where Cycles leaves every such path to
+//! the connection and clamps G at 2; casters and receivers follow from the materials rather
+//! than object flags; the constraints' derivatives are central differences in f64 (analytic
+//! in Cycles).
+
+use glam::DVec3;
+
+use super::guided::Scattering;
+use super::{RayCounters, transmittance};
+use crate::geometry::{Ray, SurfaceHit, TriangleRef, offset_ray_origin};
+use crate::light::{AreaPoint, LightId};
+use crate::light_sampler::{LightStrategy, ShadingContext};
+use crate::material::SmoothGlass;
+use crate::math::{Rgb, Vec3A, power_heuristic};
+use crate::scene::Scene;
+
+/// Most refractions a chain may have.
+pub const MAX_CASTERS: usize = 4;
+/// Newton steps before a chain is given up.
+const MAX_ITERATIONS: u32 = 40;
+/// A chain is solved when every vertex's half vector is within this sine of its normal.
+const TOLERANCE: f64 = 1e-3;
+/// Smallest step fraction the line search tries before giving up.
+const MIN_STEP: f64 = 1.0 / 1024.0;
+/// Most surfaces a seed segment may cross.
+const MAX_SEED_HITS: usize = 16;
+
+/// One refraction of a chain: a point on a triangle of smooth glass.
+#[derive(Clone, Copy, Debug)]
+struct Vertex {
+    /// The point.
+    x: DVec3,
+    /// Its triangle's first corner and the two edges from it scaled so that their dot
+    /// products with a point's offset give its barycentrics, and the corners' shading normals.
+    origin: DVec3,
+    to_b1: DVec3,
+    to_b2: DVec3,
+    normals: [DVec3; 3],
+    /// The triangle's front normal and two tangents with it an orthonormal frame: the plane
+    /// Newton's steps move the point in.
+    n_geom: DVec3,
+    s: DVec3,
+    t: DVec3,
+    /// The glass, and its material's index.
+    glass: SmoothGlass,
+    material: u32,
+}
+
+impl Vertex {
+    /// The vertex at `p` on `triangle`, of `material`, smooth glass `glass`.
+    fn new(scene: &Scene, triangle: TriangleRef, p: Vec3A, material: u32, glass: SmoothGlass) -> Self {
+        let c = scene.geometry.corners(triangle);
+        let n_geom = to_f64(c.n_geom);
+        let (s, t) = n_geom.any_orthonormal_pair();
+        let [p0, p1, p2] = c.p.map(to_f64);
+        let (e1, e2) = (p1 - p0, p2 - p0);
+        let n = e1.cross(e2) / e1.cross(e2).length_squared();
+        // b1 = (d × e2)·n = d·(e2 × n), b2 = (e1 × d)·n = d·(n × e1).
+        let (to_b1, to_b2) = (e2.cross(n), n.cross(e1));
+        Self { x: to_f64(p), origin: p0, to_b1, to_b2, normals: c.n.map(to_f64), n_geom, s, t, glass, material }
+    }
+
+    /// The vertex at `hit`, on smooth glass `glass`.
+    fn at(scene: &Scene, hit: &SurfaceHit, glass: SmoothGlass) -> Self {
+        Self::new(scene, hit.triangle, hit.p, hit.material, glass)
+    }
+
+    /// The shading normal at `x` (in the triangle's plane, perhaps beyond its edges):
+    /// the corners' normals interpolated linearly, so that it changes smoothly under a step.
+    fn normal_at(&self, x: DVec3) -> DVec3 {
+        let d = x - self.origin;
+        let (b1, b2) = (d.dot(self.to_b1), d.dot(self.to_b2));
+        (self.normals[0] * (1.0 - b1 - b2) + self.normals[1] * b1 + self.normals[2] * b2).normalize_or_zero()
+    }
+
+    /// The index of refraction on the side of the surface `w` points to.
+    fn ior_towards(&self, w: DVec3) -> f64 {
+        if w.dot(self.n_geom) > 0.0 { 1.0 } else { self.glass.ior as f64 }
+    }
+
+    /// How far the vertex at `x` is from refracting `before` into `after` (both points):
+    /// the generalised half vector's components across the shading normal, zero where
+    /// Snell's law holds.
+    fn constraint(&self, before: DVec3, x: DVec3, after: DVec3) -> [f64; 2] {
+        let (wo, wi) = ((before - x).normalize_or_zero(), (after - x).normalize_or_zero());
+        let h = (wo * self.ior_towards(wo) + wi * self.ior_towards(wi)).normalize_or_zero();
+        let c = h.cross(self.normal_at(x));
+        [c.dot(self.s), c.dot(self.t)]
+    }
+}
+
+/// Unknowns of a chain: two per vertex.
+const N: usize = 2 * MAX_CASTERS;
+
+/// A chain of refractions from the receiver `x0` to the light point `y`.
+#[derive(Clone, Copy)]
+struct Chain {
+    x0: DVec3,
+    y: DVec3,
+    v: [Option<Vertex>; MAX_CASTERS],
+    k: usize,
+}
+
+impl Chain {
+    fn vertex(&self, i: usize) -> &Vertex {
+        self.v[i].as_ref().expect("a vertex below k")
+    }
+
+    /// Every vertex's constraint with the vertices at `xs` and the light at `y`.
+    fn residual(&self, xs: &[DVec3; MAX_CASTERS], y: DVec3) -> [f64; N] {
+        let mut c = [0.0; N];
+        for i in 0..self.k {
+            let before = if i == 0 { self.x0 } else { xs[i - 1] };
+            let after = if i + 1 == self.k { y } else { xs[i + 1] };
+            let [a, b] = self.vertex(i).constraint(before, xs[i], after);
+            (c[2 * i], c[2 * i + 1]) = (a, b);
+        }
+        c
+    }
+
+    fn positions(&self) -> [DVec3; MAX_CASTERS] {
+        std::array::from_fn(|i| self.v[i].map_or(DVec3::ZERO, |v| v.x))
+    }
+
+    /// Forward-difference step for moving `x`: small against the scene's coordinates (the
+    /// truncation error is the step over the segments' lengths, 10⁻⁶ relative for metres)
+    /// yet far above f64 round-off.
+    fn step(x: DVec3) -> f64 {
+        1e-6 * (1.0 + x.abs().max_element())
+    }
+
+    /// ∂residual/∂(vertex j along its s, t), as columns 2j and 2j + 1, given the residual
+    /// `base` where the chain is.
+    fn jacobian(&self, base: &[f64; N]) -> [[f64; N]; N] {
+        let xs = self.positions();
+        let mut jac = [[0.0; N]; N];
+        for j in 0..self.k {
+            let v = self.vertex(j);
+            let h = Self::step(v.x);
+            for (axis, dir) in [v.s, v.t].into_iter().enumerate() {
+                let mut moved = xs;
+                moved[j] += dir * h;
+                let c = self.residual(&moved, self.y);
+                for (r, row) in jac.iter_mut().enumerate().take(2 * self.k) {
+                    row[2 * j + axis] = (c[r] - base[r]) / h;
+                }
+            }
+        }
+        jac
+    }
+
+    /// ∂residual/∂(light point along `a` and `b`), as two columns, given the residual `base`.
+    fn light_derivative(&self, base: &[f64; N], a: DVec3, b: DVec3) -> [[f64; 2]; N] {
+        let xs = self.positions();
+        let h = Self::step(self.y);
+        let mut d = [[0.0; 2]; N];
+        for (col, dir) in [a, b].into_iter().enumerate() {
+            let c = self.residual(&xs, self.y + dir * h);
+            for (r, row) in d.iter_mut().enumerate().take(2 * self.k) {
+                row[col] = (c[r] - base[r]) / h;
+            }
+        }
+        d
+    }
+}
+
+/// The largest of the first `n / 2` vertices' constraint lengths (whatever frame each
+/// vertex's two components are in: a step onto another triangle turns it).
+fn norm(c: &[f64; N], n: usize) -> f64 {
+    c[..n].chunks(2).fold(0.0f64, |m, v| m.max(v[0].hypot(v[1])))
+}
+
+/// Solves `a · x = b` for the leading `n` × `n` block of `a` with `M` right-hand sides, by
+/// Gaussian elimination with partial pivoting; `None` when `a` is singular there.
+// Elimination reads as the textbook's indices; iterators over two rows at once would not.
+#[allow(clippy::needless_range_loop)]
+fn solve<const M: usize>(mut a: [[f64; N]; N], mut b: [[f64; M]; N], n: usize) -> Option<[[f64; M]; N]> {
+    let scale = (0..n).flat_map(|r| (0..n).map(move |c| (r, c))).fold(0.0f64, |m, (r, c)| m.max(a[r][c].abs()));
+    for col in 0..n {
+        let pivot = (col..n).max_by(|&p, &q| a[p][col].abs().total_cmp(&a[q][col].abs()))?;
+        if !(a[pivot][col].abs() > 1e-12 * scale) {
+            return None;
+        }
+        a.swap(col, pivot);
+        b.swap(col, pivot);
+        for r in col + 1..n {
+            let f = a[r][col] / a[col][col];
+            for c in col..n {
+                a[r][c] -= f * a[col][c];
+            }
+            for c in 0..M {
+                b[r][c] -= f * b[col][c];
+            }
+        }
+    }
+    for col in (0..n).rev() {
+        for c in 0..M {
+            let mut v = b[col][c];
+            for k in col + 1..n {
+                v -= a[col][k] * b[k][c];
+            }
+            b[col][c] = v / a[col][col];
+        }
+    }
+    Some(b)
+}
+
+fn to_f32(v: DVec3) -> Vec3A {
+    Vec3A::new(v.x as f32, v.y as f32, v.z as f32)
+}
+
+fn to_f64(v: Vec3A) -> DVec3 {
+    DVec3::new(v.x as f64, v.y as f64, v.z as f64)
+}
+
+/// The ray from a point on a surface of front normal `n` towards `target`, leaving on the
+/// side it heads to.
+fn ray_between(from: Vec3A, n: Vec3A, target: Vec3A) -> Ray {
+    let side = if (target - from).dot(n) >= 0.0 { n } else { -n };
+    let origin = offset_ray_origin(from, side);
+    Ray::new(origin, target - origin)
+}
+
+/// The smooth glass `hit` is on, if it is.
+fn glass_at(scene: &Scene, hit: &SurfaceHit) -> Option<SmoothGlass> {
+    scene.materials[hit.material as usize].smooth_glass()
+}
+
+/// The refractions the straight segment from the receiver at `p` (its ray `origin`) to the
+/// light point `target` makes, or `None` when anything but smooth glass is in the way, or too much.
+fn seed(scene: &Scene, p: Vec3A, origin: Vec3A, target: Vec3A, counters: &mut RayCounters) -> Option<Chain> {
+    let mut chain = Chain { x0: to_f64(p), y: to_f64(target), v: [None; MAX_CASTERS], k: 0 };
+    let mut ray = Ray::new(origin, target - origin);
+    for _ in 0..MAX_SEED_HITS {
+        counters.rays += 1;
+        let Some(hit) = scene.intersect(&ray, 1.0) else { return (chain.k > 0).then_some(chain) };
+        let glass = glass_at(scene, &hit)?;
+        if chain.k == MAX_CASTERS {
+            return None;
+        }
+        chain.v[chain.k] = Some(Vertex::at(scene, &hit, glass));
+        chain.k += 1;
+        ray = ray_between(hit.p, hit.n_geom, target);
+    }
+    None
+}
+
+/// The chain with vertex `i` onwards moved to where rays towards `proposed` meet the same
+/// glass, or `None` where one meets something else or nothing.
+fn reproject(
+    scene: &Scene,
+    chain: &Chain,
+    origin: Vec3A,
+    proposed: &[DVec3; MAX_CASTERS],
+    counters: &mut RayCounters,
+) -> Option<Chain> {
+    let mut next = *chain;
+    for (i, &at) in proposed.iter().enumerate().take(chain.k) {
+        let target = to_f32(at);
+        let ray = if i == 0 {
+            Ray::new(origin, target - origin)
+        } else {
+            let prev = next.vertex(i - 1);
+            ray_between(to_f32(prev.x), to_f32(prev.n_geom), target)
+        };
+        counters.rays += 1;
+        // Twice the distance: the proposal lies off the surface, on either side of it.
+        let hit = scene.intersect(&ray, 2.0)?;
+        if hit.material != chain.vertex(i).material {
+            return None;
+        }
+        next.v[i] = Some(Vertex::at(scene, &hit, chain.vertex(i).glass));
+    }
+    Some(next)
+}
+
+/// Newton's method on the chain's constraints with a backtracking line search: each step
+/// moves every vertex in its triangle's plane and puts it back on the glass by a ray.
+fn solve_chain(scene: &Scene, mut chain: Chain, origin: Vec3A, counters: &mut RayCounters) -> Option<Chain> {
+    let n = 2 * chain.k;
+    let mut residual = chain.residual(&chain.positions(), chain.y);
+    let mut lambda = 1.0;
+    for _ in 0..MAX_ITERATIONS {
+        let size = norm(&residual, n);
+        if size < TOLERANCE {
+            return Some(chain);
+        }
+        let rhs: [[f64; 1]; N] = std::array::from_fn(|r| [-residual[r]]);
+        let delta = solve(chain.jacobian(&residual), rhs, n)?;
+        loop {
+            let xs = chain.positions();
+            let proposed: [DVec3; MAX_CASTERS] = std::array::from_fn(|i| match chain.v[i] {
+                Some(v) => xs[i] + (v.s * delta[2 * i][0] + v.t * delta[2 * i + 1][0]) * lambda,
+                None => DVec3::ZERO,
+            });
+            let moved = reproject(scene, &chain, origin, &proposed, counters);
+            let better = moved.map(|m| (m, m.residual(&m.positions(), m.y))).filter(|(_, r)| norm(r, n) < size);
+            if let Some((m, r)) = better {
+                (chain, residual) = (m, r);
+                lambda = (2.0 * lambda).min(1.0);
+                break;
+            }
+            lambda *= 0.5;
+            if lambda < MIN_STEP {
+                return None;
+            }
+        }
+    }
+    None
+}
+
+/// Whether every vertex of a solved chain refracts: the two directions on opposite sides of
+/// both its triangle and its shading normal.
+fn refracts_everywhere(chain: &Chain) -> bool {
+    (0..chain.k).all(|i| {
+        let v = chain.vertex(i);
+        let before = if i == 0 { chain.x0 } else { chain.vertex(i - 1).x };
+        let after = if i + 1 == chain.k { chain.y } else { chain.vertex(i + 1).x };
+        let (wo, wi) = (before - v.x, after - v.x);
+        let n = v.normal_at(v.x);
+        wo.dot(v.n_geom) * wi.dot(v.n_geom) < 0.0 && wo.dot(n) * wi.dot(n) < 0.0
+    })
+}
+
+/// The solved chain's density of the receiver's direction per unit area of the light:
+/// |det ∂ω₀/∂y| with y moving in the light's plane (normal `n_y`).
+fn geometry_term(chain: &Chain, n_y: DVec3) -> Option<f64> {
+    let n = 2 * chain.k;
+    let (a, b) = n_y.any_orthonormal_pair();
+    let base = chain.residual(&chain.positions(), chain.y);
+    let minus: [[f64; 2]; N] = chain.light_derivative(&base, a, b).map(|r| r.map(|v| -v));
+    // ∂(s₁, t₁ of the first vertex)/∂(y along a, b).
+    let d = solve(chain.jacobian(&base), minus, n)?;
+    let v1 = chain.vertex(0);
+    let to_first = v1.x - chain.x0;
+    let r = to_first.length();
+    let (e1, e2) = (to_first / r).any_orthonormal_pair();
+    let dx = |col: usize| v1.s * d[0][col] + v1.t * d[1][col];
+    let (da, db) = (dx(0), dx(1));
+    let det = (e1.dot(da) * e2.dot(db) - e1.dot(db) * e2.dot(da)) / (r * r);
+    det.is_finite().then_some(det.abs())
+}
+
+/// What the glass along a chain passes on from the light point to the receiver (Fresnel and
+/// tint at each refraction, absorption on the way through), and the probability that BSDF
+/// sampling refracts at every vertex.
+fn passage(chain: &Chain) -> (Rgb, f32) {
+    let (mut through, mut probability) = (Rgb::ONE, 1.0);
+    for i in 0..chain.k {
+        let v = chain.vertex(i);
+        let before = if i == 0 { chain.x0 } else { chain.vertex(i - 1).x };
+        let after = if i + 1 == chain.k { chain.y } else { chain.vertex(i + 1).x };
+        let (wo, wi) = ((before - v.x).normalize(), (after - v.x).normalize());
+        let cos_o = wo.dot(v.normal_at(v.x)).abs() as f32;
+        let eta = (v.ior_towards(wi) / v.ior_towards(wo)) as f32;
+        through *= v.glass.transmittance(cos_o, eta);
+        probability *= v.glass.refraction_probability(cos_o, eta);
+        if wi.dot(v.n_geom) < 0.0 && v.glass.absorption != Rgb::ZERO {
+            through *= transmittance(v.glass.absorption, (after - v.x).length() as f32);
+        }
+    }
+    (through, probability)
+}
+
+/// The chain of refractions through smooth glass that takes light from the point `y` (front
+/// normal `n_y`) on an emissive surface to the receiver at `p` (geometric normal `n_p`),
+/// solved from the straight segment between them; `None` when that segment crosses
+/// anything but smooth glass or the solve fails. A function of the two points alone: BSDF
+/// sampling asks it whether this estimator would have found a path it found.
+fn connect(scene: &Scene, p: Vec3A, n_p: Vec3A, y: Vec3A, n_y: Vec3A, counters: &mut RayCounters) -> Option<Chain> {
+    let toward = y - p;
+    let origin = offset_ray_origin(p, if toward.dot(n_p) >= 0.0 { n_p } else { -n_p });
+    let target = offset_ray_origin(y, if toward.dot(n_y) > 0.0 { -n_y } else { n_y });
+    let chain = seed(scene, p, origin, target, counters)?;
+    solve_chain(scene, chain, origin, counters).filter(refracts_everywhere)
+}
+
+/// The power-heuristic weight of the connection along a solved `chain` against BSDF
+/// sampling, both as densities per unit area of the light: `light_pdf` (selection pmf ×
+/// point density) against `bsdf_pdf` (the receiver's density of the chain's first
+/// direction) × refracting at every vertex × G. Also G.
+fn connection_weight(
+    chain: &Chain,
+    n_y: Vec3A,
+    light_pdf: f32,
+    bsdf_pdf: impl FnOnce(Vec3A) -> f32,
+) -> Option<(f32, f32)> {
+    let g = geometry_term(chain, to_f64(n_y))? as f32;
+    let (_, probability) = passage(chain);
+    let wi = to_f32((chain.vertex(0).x - chain.x0).normalize());
+    Some((power_heuristic(light_pdf, bsdf_pdf(wi) * probability * g), g))
+}
+
+/// Light from an emissive surface, sampled at `point`, reaching the surface `scattering` at
+/// `p` through smooth glass, divided by the point's density and the light's selection
+/// probability `pmf` and weighed against BSDF sampling; zero when no chain of refractions
+/// connects them or it is blocked.
+pub fn through_glass(
+    scene: &Scene,
+    point: &AreaPoint,
+    pmf: f32,
+    scattering: &Scattering,
+    p: Vec3A,
+    counters: &mut RayCounters,
+) -> Rgb {
+    let Some(chain) = connect(scene, p, scattering.sp.n_geom, point.p, point.n, counters) else { return Rgb::ZERO };
+    let last = chain.vertex(chain.k - 1);
+    let f = scattering.sp.eval_cos(to_f32((chain.vertex(0).x - chain.x0).normalize()));
+    let le = point.emission.radiance_towards(point.n, to_f32((last.x - chain.y).normalize()));
+    if f == Rgb::ZERO || le == Rgb::ZERO {
+        return Rgb::ZERO;
+    }
+    let light_pdf = pmf * point.pdf;
+    let Some((weight, g)) = connection_weight(&chain, point.n, light_pdf, |wi| scattering.pdf(wi)) else {
+        return Rgb::ZERO;
+    };
+    counters.shadow_rays += 1;
+    if scene.occluded(&ray_between(to_f32(last.x), to_f32(last.n_geom), to_f32(chain.y)), 1.0) {
+        return Rgb::ZERO;
+    }
+    f * passage(&chain).0 * le * (g * weight / light_pdf)
+}
+
+/// A surface a path left where next-event estimation looks through glass.
+#[derive(Clone, Copy, Debug)]
+struct Receiver {
+    /// Its light-selection context, and whether next-event estimation there took every light.
+    ctx: ShadingContext,
+    every_light: bool,
+    /// Its geometric normal.
+    n_geom: Vec3A,
+    /// The density with which its scattering chose the direction the path left in.
+    pdf: f32,
+}
+
+/// A path's chain of refractions through smooth glass since it last left a receiver, for
+/// the weight of the light it may meet at the chain's end against [`through_glass`].
+#[derive(Clone, Copy, Debug, Default)]
+pub struct GlassChain {
+    /// The receiver; `None` when the path has since met anything but smooth glass it
+    /// refracted through, or more of it than a chain may have.
+    from: Option<Receiver>,
+    /// Where it refracted.
+    vertices: [Vec3A; MAX_CASTERS],
+    k: usize,
+}
+
+impl GlassChain {
+    /// A path leaving a receiver at `ctx` (geometric normal `n_geom`; next-event estimation
+    /// took every light there: `every_light`) in a direction its scattering chose with
+    /// density `pdf`.
+    #[inline]
+    pub fn leaving(ctx: ShadingContext, every_light: bool, n_geom: Vec3A, pdf: f32) -> Self {
+        Self { from: Some(Receiver { ctx, every_light, n_geom, pdf }), ..Self::default() }
+    }
+
+    /// The chain, one refraction through smooth glass at `p` longer.
+    #[inline]
+    pub fn through(mut self, p: Vec3A) -> Self {
+        if self.from.is_none() || self.k == MAX_CASTERS {
+            return Self::default();
+        }
+        self.vertices[self.k] = p;
+        self.k += 1;
+        self
+    }
+
+    /// The MIS weight of the light emitted at `hit` by light `id` against [`through_glass`]
+    /// from the receiver, or `None` when the path did not reach it along a chain from one.
+    /// Where the connection would not have found this very chain, BSDF sampling's weight is 1.
+    pub fn weight(
+        &self,
+        scene: &Scene,
+        strategy: &LightStrategy,
+        hit: &SurfaceHit,
+        id: u32,
+        counters: &mut RayCounters,
+    ) -> Option<f32> {
+        let from = self.from.filter(|_| self.k > 0)?;
+        let area_pdf = scene.lights[id as usize].area_pdf()?;
+        let Some(chain) = connect(scene, from.ctx.p, from.n_geom, hit.p, hit.n_geom, counters) else {
+            return Some(1.0);
+        };
+        // The same chain: as many refractions, each where the path's was (the solve stops
+        // within 10⁻³ of Snell's law, the glass's narrowest lobe within about as much).
+        let same = chain.k == self.k
+            && (0..self.k).all(|i| {
+                let (solved, taken) = (to_f32(chain.vertex(i).x), self.vertices[i]);
+                (solved - taken).length() <= 1e-2 * (taken - from.ctx.p).length()
+            });
+        if !same {
+            return Some(1.0);
+        }
+        let pmf = strategy.selection_pmf(&from.ctx, LightId(id), from.every_light);
+        let weight = connection_weight(&chain, hit.n_geom, pmf * area_pdf, |_| from.pdf).map_or(0.0, |(w, _)| w);
+        Some(1.0 - weight)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::Material;
+    use crate::math::Mat4;
+    use crate::scene::description::{InstanceDesc, SceneDescription};
+    use crate::scene::shapes::{quad_mesh, sphere_mesh};
+    use crate::scene::{BuildOptions, build};
+
+    /// A smooth glass ball (radius 0.5, centre 0.8 m up) over a floor, with an emissive
+    /// quad: the scene the chains below cross.
+    fn ball_scene() -> Scene {
+        let glass = Material { transmission: 1.0, roughness: 0.0, ior: 1.5, ..Material::diffuse("glass", Rgb::ONE) };
+        let lamp = Material { emission: Rgb::ONE, ..Material::diffuse("lamp", Rgb::ZERO) };
+        let mut desc = SceneDescription {
+            source: "<test>".into(),
+            materials: vec![Material::diffuse("floor", Rgb::splat(0.5)), glass, lamp],
+            ..Default::default()
+        };
+        desc.meshes.push(quad_mesh("floor", Vec3A::new(-3.0, 0.0, -3.0), Vec3A::Z * 6.0, Vec3A::X * 6.0, 0));
+        desc.meshes.push(sphere_mesh("ball", Vec3A::new(0.0, 0.8, 0.0), 0.5, 5, 1));
+        desc.meshes.push(quad_mesh("lamp", Vec3A::new(-0.15, 1.6, -0.15), Vec3A::X * 0.3, Vec3A::Z * 0.3, 2));
+        for mesh in 0..3 {
+            desc.instances.push(InstanceDesc { mesh, transform: Mat4::IDENTITY, name: format!("{mesh}") });
+        }
+        let opts = BuildOptions { frame_without_camera: true, ..Default::default() };
+        build(desc, &opts).expect("the test scene builds").0
+    }
+
+    /// Snell's law at every vertex of a solved chain, checked with angles.
+    fn assert_refracts(chain: &Chain) {
+        for i in 0..chain.k {
+            let v = chain.vertex(i);
+            let before = if i == 0 { chain.x0 } else { chain.vertex(i - 1).x };
+            let after = if i + 1 == chain.k { chain.y } else { chain.vertex(i + 1).x };
+            let n = v.normal_at(v.x);
+            let (wo, wi) = ((before - v.x).normalize(), (after - v.x).normalize());
+            let sin = |w: DVec3| w.cross(n).length();
+            let snell = v.ior_towards(wo) * sin(wo) - v.ior_towards(wi) * sin(wi);
+            assert!(snell.abs() < 2e-3, "vertex {i}: η sin θ differ by {snell}");
+            // In one plane with the normal.
+            assert!(wo.cross(n).normalize().dot(wi.cross(n).normalize()) < -0.999, "vertex {i} out of plane");
+        }
+    }
+
+    #[test]
+    fn chains_obey_snell_and_their_geometry_term_is_the_density_of_directions() {
+        let scene = ball_scene();
+        let mut counters = RayCounters::default();
+        let n_y = -Vec3A::Y;
+        // One point on the floor under the ball and two on the lamp (two refractions), and
+        // one floor point to a point inside the ball (one).
+        let cases = [
+            (Vec3A::new(0.05, 0.0, 0.02), Vec3A::new(0.0, 1.6, 0.0)),
+            (Vec3A::new(-0.03, 0.0, 0.06), Vec3A::new(0.01, 1.6, -0.02)),
+            (Vec3A::new(0.4, 0.0, -0.2), Vec3A::new(0.02, 0.85, 0.01)),
+        ];
+        for (k, (p, y)) in cases.into_iter().enumerate() {
+            let chain = connect(&scene, p, Vec3A::Y, y, n_y, &mut counters).expect("a chain through the ball");
+            assert_eq!(chain.k, if k < 2 { 2 } else { 1 }, "case {k}");
+            assert_refracts(&chain);
+            let g = geometry_term(&chain, to_f64(n_y)).unwrap();
+            // The same density by brute force: solve with the light point moved by ±h along
+            // x and z, and measure the solid angle the first direction sweeps.
+            let h = 2e-3;
+            let mut dir = |dy: Vec3A| {
+                let c = connect(&scene, p, Vec3A::Y, y + dy, n_y, &mut counters).expect("a moved chain");
+                (c.vertex(0).x - c.x0).normalize()
+            };
+            let (dx, dz) = (dir(Vec3A::X * h) - dir(-Vec3A::X * h), dir(Vec3A::Z * h) - dir(-Vec3A::Z * h));
+            let brute = dx.cross(dz).length() / (4.0 * (h * h) as f64);
+            assert!((g / brute - 1.0).abs() < 0.05, "case {k}: G {g} against {brute} by moving the light");
+        }
+    }
+}
