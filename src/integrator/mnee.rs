@@ -43,8 +43,11 @@ use crate::scene::Scene;
 pub const MAX_CASTERS: usize = 4;
 /// Newton steps before a chain is given up.
 const MAX_ITERATIONS: u32 = 40;
-/// A chain is solved when every vertex's half vector is within this sine of its normal.
+/// A chain is solved when every vertex's half vector is within this sine of its normal
+/// (Cycles' figure; 10⁻⁴ took 1.1× the CPU on glass.glb for the same error).
 const TOLERANCE: f64 = 1e-3;
+/// How much further from solved a Newton step may leave a chain ([`solve_chain`]).
+const GROWTH: f64 = 2.0;
 /// Smallest step fraction the line search tries before giving up.
 const MIN_STEP: f64 = 1.0 / 1024.0;
 /// Most surfaces a seed segment may cross.
@@ -300,7 +303,10 @@ fn reproject(
 }
 
 /// Newton's method on the chain's constraints with a backtracking line search: each step
-/// moves every vertex in its triangle's plane and puts it back on the glass by a ray.
+/// moves every vertex in its triangle's plane and puts it back on the glass by a ray. A step
+/// may leave the constraints up to [`GROWTH`] times further from zero (a vertex that crosses
+/// onto another triangle turns its constraint's frame and meets other normals; insisting on
+/// a decrease cost 1.2× the time on `factors/bulb_clear.glb` for the same solutions).
 fn solve_chain(scene: &Scene, mut chain: Chain, origin: Vec3A, counters: &mut RayCounters) -> Option<Chain> {
     let n = 2 * chain.k;
     let mut residual = chain.residual(&chain.positions(), chain.y);
@@ -319,7 +325,8 @@ fn solve_chain(scene: &Scene, mut chain: Chain, origin: Vec3A, counters: &mut Ra
                 None => DVec3::ZERO,
             });
             let moved = reproject(scene, &chain, origin, &proposed, counters);
-            let better = moved.map(|m| (m, m.residual(&m.positions(), m.y))).filter(|(_, r)| norm(r, n) < size);
+            let better =
+                moved.map(|m| (m, m.residual(&m.positions(), m.y))).filter(|(_, r)| norm(r, n) < GROWTH * size);
             if let Some((m, r)) = better {
                 (chain, residual) = (m, r);
                 lambda = (2.0 * lambda).min(1.0);
