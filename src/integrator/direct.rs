@@ -20,8 +20,8 @@ use crate::scene::Scene;
 
 /// The contribution of one chosen light, divided by its selection probability `pmf`, through
 /// the volume of absorption `medium` the point lies in; where smooth glass blocks an emissive
-/// surface and the point is a `receiver`, the light that reaches it through the glass
-/// ([`mnee::through_glass`]). `observe(c, visible)` hears of each shadow ray: the luminance of
+/// surface, the light that reaches the point through at most `refractions` of it
+/// ([`mnee::through_glass`]; 0 where the point is no receiver or the path has no depth left). `observe(c, visible)` hears of each shadow ray: the luminance of
 /// the unshadowed, unweighted contribution and whether it got through.
 #[inline]
 #[allow(clippy::too_many_arguments)]
@@ -32,7 +32,7 @@ fn light_contribution(
     scattering: &Scattering,
     p: Vec3A,
     medium: Rgb,
-    receiver: bool,
+    refractions: usize,
     u: [u64; 2],
     counters: &mut RayCounters,
     observe: impl FnOnce(f32, bool),
@@ -59,10 +59,10 @@ fn light_contribution(
     let inside = medium != Rgb::ZERO && ls.wi.dot(sp.n_geom) > 0.0;
     let through = if inside { super::transmittance(medium, ls.distance) } else { Rgb::ONE };
     if occluded
-        && receiver
+        && refractions > 0
         && let Some(point) = light.area_point(u, &scene.images)
     {
-        let c = mnee::through_glass(scene, &point, pmf, scattering, p, counters);
+        let c = mnee::through_glass(scene, &point, pmf, scattering, p, refractions, counters);
         observe(luminance(c), c != Rgb::ZERO);
         return c;
     }
@@ -77,8 +77,8 @@ fn light_contribution(
 
 /// Direct light reflected towards the viewer of `scattering` at surface point `p` (inside a
 /// volume of absorption `medium`, zero outside), estimated with `strategy` and weighed
-/// against the density `scattering` samples directions with; at a `receiver`, also through
-/// smooth glass.
+/// against the density `scattering` samples directions with; also through at most
+/// `refractions` of smooth glass.
 #[inline]
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_direct(
@@ -87,7 +87,7 @@ pub fn estimate_direct(
     scattering: &Scattering,
     p: Vec3A,
     medium: Rgb,
-    receiver: bool,
+    refractions: usize,
     stream: &SampleStream,
     bounce: u32,
     tally: &mut Tally,
@@ -101,7 +101,7 @@ pub fn estimate_direct(
             .enumerate()
             .map(|(i, light)| {
                 let u = stream.get_2d_u64(bounce, Dim::LightPoint, i as u32);
-                light_contribution(scene, light, 1.0, scattering, p, medium, receiver, u, &mut tally.rays, |_, _| {})
+                light_contribution(scene, light, 1.0, scattering, p, medium, refractions, u, &mut tally.rays, |_, _| {})
             })
             .fold(Rgb::ZERO, |a, b| a + b),
         Some(sampler) => {
@@ -117,7 +117,7 @@ pub fn estimate_direct(
                     let light = &scene.lights[s.light.0 as usize];
                     let Tally { rays, seen, .. } = tally;
                     let observe = |c, visible| seen.record_light_sample(strategy, &ctx, s.light, c, visible);
-                    light_contribution(scene, light, s.pmf, scattering, p, medium, receiver, u_point, rays, observe)
+                    light_contribution(scene, light, s.pmf, scattering, p, medium, refractions, u_point, rays, observe)
                 }
                 None => Rgb::ZERO,
             }

@@ -255,15 +255,23 @@ fn glass_at(scene: &Scene, hit: &SurfaceHit) -> Option<SmoothGlass> {
 }
 
 /// The refractions the straight segment from the receiver at `p` (its ray `origin`) to the
-/// light point `target` makes, or `None` when anything but smooth glass is in the way, or too much.
-fn seed(scene: &Scene, p: Vec3A, origin: Vec3A, target: Vec3A, counters: &mut RayCounters) -> Option<Chain> {
+/// light point `target` makes, or `None` when anything but smooth glass is in the way, or
+/// more than `most` refractions.
+fn seed(
+    scene: &Scene,
+    p: Vec3A,
+    origin: Vec3A,
+    target: Vec3A,
+    most: usize,
+    counters: &mut RayCounters,
+) -> Option<Chain> {
     let mut chain = Chain { x0: to_f64(p), y: to_f64(target), v: [None; MAX_CASTERS], k: 0 };
     let mut ray = Ray::new(origin, target - origin);
     for _ in 0..MAX_SEED_HITS {
         counters.rays += 1;
         let Some(hit) = scene.intersect(&ray, 1.0) else { return (chain.k > 0).then_some(chain) };
         let glass = glass_at(scene, &hit)?;
-        if chain.k == MAX_CASTERS {
+        if chain.k == most {
             return None;
         }
         chain.v[chain.k] = Some(Vertex::at(scene, &hit, glass));
@@ -397,13 +405,21 @@ fn passage(chain: &Chain) -> (Rgb, f32) {
 /// The chain of refractions through smooth glass that takes light from the point `y` (front
 /// normal `n_y`) on an emissive surface to the receiver at `p` (geometric normal `n_p`),
 /// solved from the straight segment between them; `None` when that segment crosses
-/// anything but smooth glass or the solve fails. A function of the two points alone: BSDF
+/// anything but smooth glass, or more than `most` times, or the solve fails. A function of the two points alone: BSDF
 /// sampling asks it whether this estimator would have found a path it found.
-fn connect(scene: &Scene, p: Vec3A, n_p: Vec3A, y: Vec3A, n_y: Vec3A, counters: &mut RayCounters) -> Option<Chain> {
+fn connect(
+    scene: &Scene,
+    p: Vec3A,
+    n_p: Vec3A,
+    y: Vec3A,
+    n_y: Vec3A,
+    most: usize,
+    counters: &mut RayCounters,
+) -> Option<Chain> {
     let toward = y - p;
     let origin = offset_ray_origin(p, if toward.dot(n_p) >= 0.0 { n_p } else { -n_p });
     let target = offset_ray_origin(y, if toward.dot(n_y) > 0.0 { -n_y } else { n_y });
-    let chain = seed(scene, p, origin, target, counters)?;
+    let chain = seed(scene, p, origin, target, most, counters)?;
     solve_chain(scene, chain, origin, counters).filter(refracts_everywhere)
 }
 
@@ -425,17 +441,21 @@ fn connection_weight(
 
 /// Light from an emissive surface, sampled at `point`, reaching the surface `scattering` at
 /// `p` through smooth glass, divided by the point's density and the light's selection
-/// probability `pmf` and weighed against BSDF sampling; zero when no chain of refractions
-/// connects them or it is blocked.
+/// probability `pmf` and weighed against BSDF sampling; zero when no chain of at most `most`
+/// refractions connects them (a path through more would end before it reached the light:
+/// its depth counts each one) or it is blocked.
 pub fn through_glass(
     scene: &Scene,
     point: &AreaPoint,
     pmf: f32,
     scattering: &Scattering,
     p: Vec3A,
+    most: usize,
     counters: &mut RayCounters,
 ) -> Rgb {
-    let Some(chain) = connect(scene, p, scattering.sp.n_geom, point.p, point.n, counters) else { return Rgb::ZERO };
+    let Some(chain) = connect(scene, p, scattering.sp.n_geom, point.p, point.n, most, counters) else {
+        return Rgb::ZERO;
+    };
     let last = chain.vertex(chain.k - 1);
     let f = scattering.sp.eval_cos(to_f32((chain.vertex(0).x - chain.x0).normalize()));
     let le = point.emission.radiance_towards(point.n, to_f32((last.x - chain.y).normalize()));
@@ -510,7 +530,8 @@ impl GlassChain {
     ) -> Option<f32> {
         let from = self.from.filter(|_| self.k > 0)?;
         let area_pdf = scene.lights[id as usize].area_pdf()?;
-        let Some(chain) = connect(scene, from.ctx.p, from.n_geom, hit.p, hit.n_geom, counters) else {
+        // The path reached the light within its depth, so the connection had room for its chain.
+        let Some(chain) = connect(scene, from.ctx.p, from.n_geom, hit.p, hit.n_geom, MAX_CASTERS, counters) else {
             return Some(1.0);
         };
         // The same chain: as many refractions, each where the path's was (the solve stops
@@ -587,7 +608,8 @@ mod tests {
             (Vec3A::new(0.4, 0.0, -0.2), Vec3A::new(0.02, 0.85, 0.01)),
         ];
         for (k, (p, y)) in cases.into_iter().enumerate() {
-            let chain = connect(&scene, p, Vec3A::Y, y, n_y, &mut counters).expect("a chain through the ball");
+            let chain =
+                connect(&scene, p, Vec3A::Y, y, n_y, MAX_CASTERS, &mut counters).expect("a chain through the ball");
             assert_eq!(chain.k, if k < 2 { 2 } else { 1 }, "case {k}");
             assert_refracts(&chain);
             let g = geometry_term(&chain, to_f64(n_y)).unwrap();
@@ -595,7 +617,7 @@ mod tests {
             // x and z, and measure the solid angle the first direction sweeps.
             let h = 2e-3;
             let mut dir = |dy: Vec3A| {
-                let c = connect(&scene, p, Vec3A::Y, y + dy, n_y, &mut counters).expect("a moved chain");
+                let c = connect(&scene, p, Vec3A::Y, y + dy, n_y, MAX_CASTERS, &mut counters).expect("a moved chain");
                 (c.vertex(0).x - c.x0).normalize()
             };
             let (dx, dz) = (dir(Vec3A::X * h) - dir(-Vec3A::X * h), dir(Vec3A::Z * h) - dir(-Vec3A::Z * h));

@@ -9,7 +9,7 @@
 
 use super::direct::estimate_direct;
 use super::guided::Scattering;
-use super::mnee::GlassChain;
+use super::mnee::{GlassChain, MAX_CASTERS};
 use super::timing::timed;
 use super::transmittance;
 use super::{RayCounters, Tally};
@@ -286,8 +286,10 @@ impl Tracer<'_> {
             let receiver = scene.caustics && glass.is_none() && medium == Rgb::ZERO;
 
             if !scene.lights.is_empty() {
-                let direct =
-                    beta * estimate_direct(scene, strategy, &scattering, hit.p, medium, receiver, stream, depth, tally);
+                // A light reached through k refractions ends a path k vertices deeper.
+                let refractions = if receiver { MAX_CASTERS.min((max_depth - depth - 1) as usize) } else { 0 };
+                let direct = beta
+                    * estimate_direct(scene, strategy, &scattering, hit.p, medium, refractions, stream, depth, tally);
                 l += clamped(direct, clamp.limit(depth >= 1));
             }
 
