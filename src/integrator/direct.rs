@@ -5,7 +5,9 @@
 //! pmf × pdf and MIS-weighted (power heuristic) against the BSDF's density for the same
 //! direction. Where the strategy takes every light (`all`, and the default over a few lights
 //! at diffuse points), every light gets its own point (`Dim::LightPoint`, sub-index = light)
-//! and selection pmf 1. Delta lights get weight 1: BSDF sampling cannot find them.
+//! and selection pmf 1. Delta lights get weight 1: BSDF sampling cannot find them. A sample
+//! on an emissive surface that only smooth glass blocks is reached through the glass instead
+//! (`mnee`).
 
 use super::guided::Scattering;
 use super::mnee;
@@ -21,8 +23,9 @@ use crate::scene::Scene;
 /// The contribution of one chosen light, divided by its selection probability `pmf`, through
 /// the volume of absorption `medium` the point lies in; where smooth glass blocks an emissive
 /// surface, the light that reaches the point through at most `refractions` of it
-/// ([`mnee::through_glass`]; 0 where the point is no receiver or the path has no depth left). `observe(c, visible)` hears of each shadow ray: the luminance of
-/// the unshadowed, unweighted contribution and whether it got through.
+/// ([`mnee::through_glass`]; 0 where the point is no receiver or the path has no depth
+/// left). `observe(c, visible)` hears of each shadow ray: the luminance of the unshadowed,
+/// unweighted contribution and whether it got through.
 #[inline]
 #[allow(clippy::too_many_arguments)]
 fn light_contribution(
