@@ -126,11 +126,14 @@ impl fmt::Display for InfoReport {
             f,
             "caustics     {}",
             if s.caustics {
-                format!("light from emissive surfaces through smooth glass ({}) is solved for", smooth.join(", "))
+                format!(
+                    "light from emissive surfaces, point and directional lights through smooth glass ({}) is solved for",
+                    smooth.join(", ")
+                )
             } else if smooth.is_empty() {
                 "no smooth solid glass: nothing to solve for".into()
             } else {
-                "no emissive surface to solve for through smooth glass".into()
+                "no emissive surface, point or directional light to solve for through smooth glass".into()
             }
         )?;
         for (name, what) in &r.extensions {

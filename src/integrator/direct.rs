@@ -22,10 +22,9 @@ use crate::scene::Scene;
 
 /// The contribution of one chosen light, divided by its selection probability `pmf`, through
 /// the volume of absorption `medium` the point lies in; where smooth glass blocks an emissive
-/// surface, the light that reaches the point through at most `refractions` of it
-/// ([`mnee::through_glass`]; 0 where the point is no receiver or the path has no depth
-/// left). `observe(c, visible)` hears of each shadow ray: the luminance of the unshadowed,
-/// unweighted contribution and whether it got through.
+/// surface or a point or directional light, the light that reaches the point through it
+/// ([`mnee`], as `glass` allows). `observe(c, visible)` hears of each shadow ray: the
+/// luminance of the unshadowed, unweighted contribution and whether it got through.
 #[inline]
 #[allow(clippy::too_many_arguments)]
 fn light_contribution(
@@ -35,7 +34,7 @@ fn light_contribution(
     scattering: &Scattering,
     p: Vec3A,
     medium: Rgb,
-    refractions: usize,
+    glass: mnee::AtVertex,
     u: [u64; 2],
     counters: &mut RayCounters,
     observe: impl FnOnce(f32, bool),
@@ -43,7 +42,9 @@ fn light_contribution(
     let Some(ls) = light.sample_li(p, u, &scene.images) else { return Rgb::ZERO };
     let sp = &scattering.sp;
     let f = sp.eval_cos(ls.wi);
-    if f == Rgb::ZERO || !(ls.pdf > 0.0) {
+    // A delta light behind glass is connected to whatever the straight way's cosine says.
+    let delta_through = glass.refractions > 0 && mnee::connects_delta(light);
+    if (f == Rgb::ZERO || !(ls.pdf > 0.0)) && !delta_through {
         return Rgb::ZERO;
     }
     let origin = sp.ray_origin(p, ls.wi);
@@ -61,17 +62,32 @@ fn light_contribution(
     // towards the far side the ray leaves it at once.
     let inside = medium != Rgb::ZERO && ls.wi.dot(sp.n_geom) > 0.0;
     let through = if inside { super::transmittance(medium, ls.distance) } else { Rgb::ONE };
-    if occluded
-        && refractions > 0
-        && let Some(point) = light.area_point(u, &scene.images)
-    {
-        let c = mnee::through_glass(scene, &point, pmf, scattering, p, refractions, counters);
+    if occluded && delta_through {
+        let c = mnee::delta_through_glass(scene, light, &ls, u, pmf, scattering, p, glass.refractions, counters);
         observe(luminance(c), c != Rgb::ZERO);
         return c;
+    }
+    if occluded
+        && glass.refractions > 0
+        && let Some(point) = light.area_point(u, &scene.images)
+    {
+        let c = mnee::through_glass(scene, &point, pmf, scattering, p, glass.refractions, counters);
+        observe(luminance(c), c != Rgb::ZERO);
+        return c;
+    }
+    if f == Rgb::ZERO {
+        return Rgb::ZERO;
     }
     let unshadowed = f * ls.radiance * through / (pmf * ls.pdf);
     observe(luminance(unshadowed), !occluded);
     if occluded {
+        return Rgb::ZERO;
+    }
+    // Light the receiver's connection through this glass already brought.
+    if let Some(chain) = glass.chain
+        && mnee::connects_delta(light)
+        && chain.leads_to(scene, p, &ls, counters)
+    {
         return Rgb::ZERO;
     }
     let weight = if light.is_delta() { 1.0 } else { power_heuristic(pmf * ls.pdf, scattering.pdf(ls.wi)) };
@@ -80,8 +96,8 @@ fn light_contribution(
 
 /// Direct light reflected towards the viewer of `scattering` at surface point `p` (inside a
 /// volume of absorption `medium`, zero outside), estimated with `strategy` and weighed
-/// against the density `scattering` samples directions with; also through at most
-/// `refractions` of smooth glass.
+/// against the density `scattering` samples directions with; also through smooth glass, as
+/// `glass` allows.
 #[inline]
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_direct(
@@ -90,7 +106,7 @@ pub fn estimate_direct(
     scattering: &Scattering,
     p: Vec3A,
     medium: Rgb,
-    refractions: usize,
+    glass: mnee::AtVertex,
     stream: &SampleStream,
     bounce: u32,
     tally: &mut Tally,
@@ -104,7 +120,7 @@ pub fn estimate_direct(
             .enumerate()
             .map(|(i, light)| {
                 let u = stream.get_2d_u64(bounce, Dim::LightPoint, i as u32);
-                light_contribution(scene, light, 1.0, scattering, p, medium, refractions, u, &mut tally.rays, |_, _| {})
+                light_contribution(scene, light, 1.0, scattering, p, medium, glass, u, &mut tally.rays, |_, _| {})
             })
             .fold(Rgb::ZERO, |a, b| a + b),
         Some(sampler) => {
@@ -120,7 +136,7 @@ pub fn estimate_direct(
                     let light = &scene.lights[s.light.0 as usize];
                     let Tally { rays, seen, .. } = tally;
                     let observe = |c, visible| seen.record_light_sample(strategy, &ctx, s.light, c, visible);
-                    light_contribution(scene, light, s.pmf, scattering, p, medium, refractions, u_point, rays, observe)
+                    light_contribution(scene, light, s.pmf, scattering, p, medium, glass, u_point, rays, observe)
                 }
                 None => Rgb::ZERO,
             }

@@ -33,7 +33,7 @@ use glam::DVec3;
 use super::guided::Scattering;
 use super::{RayCounters, transmittance};
 use crate::geometry::{Ray, SurfaceHit, TriangleRef, offset_ray_origin};
-use crate::light::{AreaPoint, LightId};
+use crate::light::{AreaPoint, Light, LightId, LightSample};
 use crate::light_sampler::{LightStrategy, ShadingContext};
 use crate::material::SmoothGlass;
 use crate::math::{Rgb, Vec3A, power_heuristic};
@@ -106,11 +106,10 @@ impl Vertex {
         if w.dot(self.n_geom) > 0.0 { 1.0 } else { self.glass.ior as f64 }
     }
 
-    /// How far the vertex at `x` is from refracting `before` into `after` (both points):
-    /// the generalised half vector's components across the shading normal, zero where
-    /// Snell's law holds.
-    fn constraint(&self, before: DVec3, x: DVec3, after: DVec3) -> [f64; 2] {
-        let (wo, wi) = ((before - x).normalize_or_zero(), (after - x).normalize_or_zero());
+    /// How far the vertex at `x` is from refracting the unit direction `wo` (towards the
+    /// receiver) into `wi` (towards the light): the generalised half vector's components
+    /// across the shading normal, zero where Snell's law holds.
+    fn constraint(&self, x: DVec3, wo: DVec3, wi: DVec3) -> [f64; 2] {
         let h = (wo * self.ior_towards(wo) + wi * self.ior_towards(wi)).normalize_or_zero();
         let c = h.cross(self.normal_at(x));
         [c.dot(self.s), c.dot(self.t)]
@@ -120,11 +119,29 @@ impl Vertex {
 /// Unknowns of a chain: two per vertex.
 const N: usize = 2 * MAX_CASTERS;
 
-/// A chain of refractions from the receiver `x0` to the light point `y`.
+/// Where a chain's light is: a point (on an emissive surface, or a point light), or the
+/// direction towards a directional light.
+#[derive(Clone, Copy, Debug)]
+enum End {
+    Point(DVec3),
+    Direction(DVec3),
+}
+
+impl End {
+    /// The unit direction from `x` towards the light.
+    fn seen_from(self, x: DVec3) -> DVec3 {
+        match self {
+            End::Point(y) => (y - x).normalize_or_zero(),
+            End::Direction(d) => d,
+        }
+    }
+}
+
+/// A chain of refractions from the receiver `x0` to the light at `end`.
 #[derive(Clone, Copy)]
 struct Chain {
     x0: DVec3,
-    y: DVec3,
+    end: End,
     v: [Option<Vertex>; MAX_CASTERS],
     k: usize,
 }
@@ -134,16 +151,29 @@ impl Chain {
         self.v[i].as_ref().expect("a vertex below k")
     }
 
-    /// Every vertex's constraint with the vertices at `xs` and the light at `y`.
-    fn residual(&self, xs: &[DVec3; MAX_CASTERS], y: DVec3) -> [f64; N] {
+    /// The unit directions at vertex `i` (at `xs[i]`) towards the receiver at `x0` and
+    /// towards the light at `end`, through the vertices at `xs`.
+    fn directions(&self, x0: DVec3, xs: &[DVec3; MAX_CASTERS], end: End, i: usize) -> (DVec3, DVec3) {
+        let before = if i == 0 { x0 } else { xs[i - 1] };
+        let wi = if i + 1 == self.k { end.seen_from(xs[i]) } else { (xs[i + 1] - xs[i]).normalize_or_zero() };
+        ((before - xs[i]).normalize_or_zero(), wi)
+    }
+
+    /// Every vertex's constraint with the receiver at `x0`, the vertices at `xs` and the
+    /// light at `end`.
+    fn residual_at(&self, x0: DVec3, xs: &[DVec3; MAX_CASTERS], end: End) -> [f64; N] {
         let mut c = [0.0; N];
         for i in 0..self.k {
-            let before = if i == 0 { self.x0 } else { xs[i - 1] };
-            let after = if i + 1 == self.k { y } else { xs[i + 1] };
-            let [a, b] = self.vertex(i).constraint(before, xs[i], after);
+            let (wo, wi) = self.directions(x0, xs, end, i);
+            let [a, b] = self.vertex(i).constraint(xs[i], wo, wi);
             (c[2 * i], c[2 * i + 1]) = (a, b);
         }
         c
+    }
+
+    /// Every vertex's constraint with the vertices at `xs`.
+    fn residual(&self, xs: &[DVec3; MAX_CASTERS]) -> [f64; N] {
+        self.residual_at(self.x0, xs, self.end)
     }
 
     fn positions(&self) -> [DVec3; MAX_CASTERS] {
@@ -168,7 +198,7 @@ impl Chain {
             for (axis, dir) in [v.s, v.t].into_iter().enumerate() {
                 let mut moved = xs;
                 moved[j] += dir * h;
-                let c = self.residual(&moved, self.y);
+                let c = self.residual(&moved);
                 for (r, row) in jac.iter_mut().enumerate().take(2 * self.k) {
                     row[2 * j + axis] = (c[r] - base[r]) / h;
                 }
@@ -177,18 +207,31 @@ impl Chain {
         jac
     }
 
-    /// ∂residual/∂(light point along `a` and `b`), as two columns, given the residual `base`.
-    fn light_derivative(&self, base: &[f64; N], a: DVec3, b: DVec3) -> [[f64; 2]; N] {
+    /// How the first vertex's coordinates (s₁, t₁) move as one end of the solved chain
+    /// moves along `a` and `b` (the light point, or with `receiver` the receiver), the
+    /// vertices following so that the constraints stay met: −J⁻¹ ∂residual/∂end, by the
+    /// implicit function theorem, for all vertices (rows 2i, 2i + 1 for vertex i).
+    fn follow(&self, a: DVec3, b: DVec3, receiver: bool) -> Option<[[f64; 2]; N]> {
         let xs = self.positions();
-        let h = Self::step(self.y);
-        let mut d = [[0.0; 2]; N];
+        let base = self.residual(&xs);
+        let at = match (receiver, self.end) {
+            (true, _) => self.x0,
+            (false, End::Point(y)) => y,
+            (false, End::Direction(_)) => return None,
+        };
+        let h = Self::step(at);
+        let mut minus = [[0.0; 2]; N];
         for (col, dir) in [a, b].into_iter().enumerate() {
-            let c = self.residual(&xs, self.y + dir * h);
-            for (r, row) in d.iter_mut().enumerate().take(2 * self.k) {
-                row[col] = (c[r] - base[r]) / h;
+            let c = if receiver {
+                self.residual_at(self.x0 + dir * h, &xs, self.end)
+            } else {
+                self.residual_at(self.x0, &xs, End::Point(at + dir * h))
+            };
+            for (r, row) in minus.iter_mut().enumerate().take(2 * self.k) {
+                row[col] = -(c[r] - base[r]) / h;
             }
         }
-        d
+        solve(self.jacobian(&base), minus, 2 * self.k)
     }
 }
 
@@ -249,34 +292,42 @@ fn ray_between(from: Vec3A, n: Vec3A, target: Vec3A) -> Ray {
     Ray::new(origin, target - origin)
 }
 
+/// The ray from `origin` to the light at `end` and how far along it the light is.
+fn ray_to(origin: Vec3A, end: End) -> (Ray, f32) {
+    match end {
+        End::Point(y) => (Ray::new(origin, to_f32(y) - origin), 1.0),
+        End::Direction(d) => (Ray::new(origin, to_f32(d)), f32::INFINITY),
+    }
+}
+
+/// The ray from a point on a surface of front normal `n` to the light at `end`, leaving on
+/// the side it heads to, and how far along it the light is.
+fn ray_from_surface(from: Vec3A, n: Vec3A, end: End) -> (Ray, f32) {
+    let towards = to_f32(end.seen_from(to_f64(from)));
+    ray_to(offset_ray_origin(from, if towards.dot(n) >= 0.0 { n } else { -n }), end)
+}
+
 /// The smooth glass `hit` is on, if it is.
 fn glass_at(scene: &Scene, hit: &SurfaceHit) -> Option<SmoothGlass> {
     scene.materials[hit.material as usize].smooth_glass()
 }
 
-/// The refractions the straight segment from the receiver at `p` (its ray `origin`) to the
-/// light point `target` makes, or `None` when anything but smooth glass is in the way, or
-/// more than `most` refractions.
-fn seed(
-    scene: &Scene,
-    p: Vec3A,
-    origin: Vec3A,
-    target: Vec3A,
-    most: usize,
-    counters: &mut RayCounters,
-) -> Option<Chain> {
-    let mut chain = Chain { x0: to_f64(p), y: to_f64(target), v: [None; MAX_CASTERS], k: 0 };
-    let mut ray = Ray::new(origin, target - origin);
+/// The refractions the straight way from the receiver at `p` (its ray `origin`) to the light
+/// at `end` makes, or `None` when anything but smooth glass is in the way, or more than
+/// `most` refractions.
+fn seed(scene: &Scene, p: Vec3A, origin: Vec3A, end: End, most: usize, counters: &mut RayCounters) -> Option<Chain> {
+    let mut chain = Chain { x0: to_f64(p), end, v: [None; MAX_CASTERS], k: 0 };
+    let (mut ray, t_max) = ray_to(origin, end);
     for _ in 0..MAX_SEED_HITS {
         counters.rays += 1;
-        let Some(hit) = scene.intersect(&ray, 1.0) else { return (chain.k > 0).then_some(chain) };
+        let Some(hit) = scene.intersect(&ray, t_max) else { return (chain.k > 0).then_some(chain) };
         let glass = glass_at(scene, &hit)?;
         if chain.k == most {
             return None;
         }
         chain.v[chain.k] = Some(Vertex::at(scene, &hit, glass));
         chain.k += 1;
-        ray = ray_between(hit.p, hit.n_geom, target);
+        ray = ray_from_surface(hit.p, hit.n_geom, end).0;
     }
     None
 }
@@ -317,7 +368,7 @@ fn reproject(
 /// a decrease cost 1.2× the time on `factors/bulb_clear.glb` for the same solutions).
 fn solve_chain(scene: &Scene, mut chain: Chain, origin: Vec3A, counters: &mut RayCounters) -> Option<Chain> {
     let n = 2 * chain.k;
-    let mut residual = chain.residual(&chain.positions(), chain.y);
+    let mut residual = chain.residual(&chain.positions());
     let mut lambda = 1.0;
     for _ in 0..MAX_ITERATIONS {
         let size = norm(&residual, n);
@@ -333,8 +384,7 @@ fn solve_chain(scene: &Scene, mut chain: Chain, origin: Vec3A, counters: &mut Ra
                 None => DVec3::ZERO,
             });
             let moved = reproject(scene, &chain, origin, &proposed, counters);
-            let better =
-                moved.map(|m| (m, m.residual(&m.positions(), m.y))).filter(|(_, r)| norm(r, n) < GROWTH * size);
+            let better = moved.map(|m| (m, m.residual(&m.positions()))).filter(|(_, r)| norm(r, n) < GROWTH * size);
             if let Some((m, r)) = better {
                 (chain, residual) = (m, r);
                 lambda = (2.0 * lambda).min(1.0);
@@ -352,11 +402,10 @@ fn solve_chain(scene: &Scene, mut chain: Chain, origin: Vec3A, counters: &mut Ra
 /// Whether every vertex of a solved chain refracts: the two directions on opposite sides of
 /// both its triangle and its shading normal.
 fn refracts_everywhere(chain: &Chain) -> bool {
+    let xs = chain.positions();
     (0..chain.k).all(|i| {
         let v = chain.vertex(i);
-        let before = if i == 0 { chain.x0 } else { chain.vertex(i - 1).x };
-        let after = if i + 1 == chain.k { chain.y } else { chain.vertex(i + 1).x };
-        let (wo, wi) = (before - v.x, after - v.x);
+        let (wo, wi) = chain.directions(chain.x0, &xs, chain.end, i);
         let n = v.normal_at(v.x);
         wo.dot(v.n_geom) * wi.dot(v.n_geom) < 0.0 && wo.dot(n) * wi.dot(n) < 0.0
     })
@@ -365,12 +414,9 @@ fn refracts_everywhere(chain: &Chain) -> bool {
 /// The solved chain's density of the receiver's direction per unit area of the light:
 /// |det ∂ω₀/∂y| with y moving in the light's plane (normal `n_y`).
 fn geometry_term(chain: &Chain, n_y: DVec3) -> Option<f64> {
-    let n = 2 * chain.k;
     let (a, b) = n_y.any_orthonormal_pair();
-    let base = chain.residual(&chain.positions(), chain.y);
-    let minus: [[f64; 2]; N] = chain.light_derivative(&base, a, b).map(|r| r.map(|v| -v));
     // ∂(s₁, t₁ of the first vertex)/∂(y along a, b).
-    let d = solve(chain.jacobian(&base), minus, n)?;
+    let d = chain.follow(a, b, false)?;
     let v1 = chain.vertex(0);
     let to_first = v1.x - chain.x0;
     let r = to_first.length();
@@ -381,22 +427,50 @@ fn geometry_term(chain: &Chain, n_y: DVec3) -> Option<f64> {
     det.is_finite().then_some(det.abs())
 }
 
+/// The solved chain's density, at the receiver, of a delta light's light at its end: how
+/// much of a point light's directions (|det ∂ω_L/∂x₀|) or of a directional light's beam
+/// cross-section (|det ∂x_k/∂x₀| across the beam) falls on unit area across the first
+/// direction ω₀, the receiver moving across it and the chain following. Without glass
+/// this is 1/d² and 1.
+fn delta_density(chain: &Chain) -> Option<f64> {
+    let (a, b) = (chain.vertex(0).x - chain.x0).normalize().any_orthonormal_pair();
+    let d = chain.follow(a, b, true)?;
+    let (i, last) = (chain.k - 1, chain.vertex(chain.k - 1));
+    let dx = |col: usize| last.s * d[2 * i][col] + last.t * d[2 * i + 1][col];
+    let (da, db) = (dx(0), dx(1));
+    let (axis, scale) = match chain.end {
+        End::Point(y) => {
+            let r = (last.x - y).length();
+            ((last.x - y) / r, 1.0 / (r * r))
+        }
+        End::Direction(w) => (w, 1.0),
+    };
+    let (e1, e2) = axis.any_orthonormal_pair();
+    let det = (e1.dot(da) * e2.dot(db) - e1.dot(db) * e2.dot(da)) * scale;
+    det.is_finite().then_some(det.abs())
+}
+
 /// What the glass along a chain passes on from the light point to the receiver (Fresnel and
 /// tint at each refraction, absorption on the way through), and the probability that BSDF
 /// sampling refracts at every vertex.
 fn passage(chain: &Chain) -> (Rgb, f32) {
     let (mut through, mut probability) = (Rgb::ONE, 1.0);
+    let xs = chain.positions();
     for i in 0..chain.k {
         let v = chain.vertex(i);
-        let before = if i == 0 { chain.x0 } else { chain.vertex(i - 1).x };
-        let after = if i + 1 == chain.k { chain.y } else { chain.vertex(i + 1).x };
-        let (wo, wi) = ((before - v.x).normalize(), (after - v.x).normalize());
+        let (wo, wi) = chain.directions(chain.x0, &xs, chain.end, i);
         let cos_o = wo.dot(v.normal_at(v.x)).abs() as f32;
         let eta = (v.ior_towards(wi) / v.ior_towards(wo)) as f32;
         through *= v.glass.transmittance(cos_o, eta);
         probability *= v.glass.refraction_probability(cos_o, eta);
         if wi.dot(v.n_geom) < 0.0 && v.glass.absorption != Rgb::ZERO {
-            through *= transmittance(v.glass.absorption, (after - v.x).length() as f32);
+            let length = match (i + 1 == chain.k, chain.end) {
+                (false, _) => (xs[i + 1] - v.x).length(),
+                (true, End::Point(y)) => (y - v.x).length(),
+                // A directional light seen from inside the glass: it is no way out.
+                (true, End::Direction(_)) => return (Rgb::ZERO, 0.0),
+            };
+            through *= transmittance(v.glass.absorption, length as f32);
         }
     }
     (through, probability)
@@ -417,9 +491,16 @@ fn connect(
     counters: &mut RayCounters,
 ) -> Option<Chain> {
     let toward = y - p;
-    let origin = offset_ray_origin(p, if toward.dot(n_p) >= 0.0 { n_p } else { -n_p });
     let target = offset_ray_origin(y, if toward.dot(n_y) > 0.0 { -n_y } else { n_y });
-    let chain = seed(scene, p, origin, target, most, counters)?;
+    connect_to(scene, p, n_p, End::Point(to_f64(target)), most, counters)
+}
+
+/// The chain of at most `most` refractions through smooth glass from the receiver at `p`
+/// (geometric normal `n_p`) to the light at `end`, seeded by the straight way and solved.
+fn connect_to(scene: &Scene, p: Vec3A, n_p: Vec3A, end: End, most: usize, counters: &mut RayCounters) -> Option<Chain> {
+    let towards = to_f32(end.seen_from(to_f64(p)));
+    let origin = offset_ray_origin(p, if towards.dot(n_p) >= 0.0 { n_p } else { -n_p });
+    let chain = seed(scene, p, origin, end, most, counters)?;
     solve_chain(scene, chain, origin, counters).filter(refracts_everywhere)
 }
 
@@ -458,7 +539,7 @@ pub fn through_glass(
     };
     let last = chain.vertex(chain.k - 1);
     let f = scattering.sp.eval_cos(to_f32((chain.vertex(0).x - chain.x0).normalize()));
-    let le = point.emission.radiance_towards(point.n, to_f32((last.x - chain.y).normalize()));
+    let le = point.emission.radiance_towards(point.n, to_f32(-chain.end.seen_from(last.x)));
     if f == Rgb::ZERO || le == Rgb::ZERO {
         return Rgb::ZERO;
     }
@@ -466,11 +547,79 @@ pub fn through_glass(
     let Some((weight, g)) = connection_weight(&chain, point.n, light_pdf, |wi| scattering.pdf(wi)) else {
         return Rgb::ZERO;
     };
-    counters.shadow_rays += 1;
-    if scene.occluded(&ray_between(to_f32(last.x), to_f32(last.n_geom), to_f32(chain.y)), 1.0) {
+    if !light_reaches(scene, &chain, counters) {
         return Rgb::ZERO;
     }
     f * passage(&chain).0 * le * (g * weight / light_pdf)
+}
+
+/// Whether nothing blocks the chain's last segment, from its last refraction to the light.
+fn light_reaches(scene: &Scene, chain: &Chain, counters: &mut RayCounters) -> bool {
+    let last = chain.vertex(chain.k - 1);
+    let (ray, t_max) = ray_from_surface(to_f32(last.x), to_f32(last.n_geom), chain.end);
+    counters.shadow_rays += 1;
+    !scene.occluded(&ray, t_max)
+}
+
+/// Whether the connection through glass serves `light` as a delta light (point and
+/// directional lights; spots keep next-event estimation at the glass).
+#[inline]
+pub fn connects_delta(light: &Light) -> bool {
+    light.is_delta() && light.connects_through_glass()
+}
+
+/// What next-event estimation at a vertex has to do with smooth glass.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct AtVertex {
+    /// How many refractions through smooth glass a light sample may be connected through
+    /// here: 0 where the vertex is no receiver or the path has no depth left for one.
+    pub refractions: usize,
+    /// At smooth glass that a path reached along a chain from a receiver: that chain.
+    pub chain: Option<GlassChain>,
+}
+
+/// Where a delta light (point, spot or directional) is, for a chain to end at.
+fn delta_end(sample: &LightSample) -> End {
+    if sample.distance.is_infinite() { End::Direction(to_f64(sample.wi)) } else { End::Point(to_f64(sample.p)) }
+}
+
+/// Light from the delta light `light` (its sample from `p`: `sample`) reaching the surface
+/// `scattering` at `p` through at most `most` refractions of smooth glass, divided by the
+/// light's selection probability `pmf`; zero when no chain connects them or it is blocked.
+/// BSDF sampling cannot find such light, so it takes it all; next-event estimation at the
+/// glass along the same chain takes none ([`GlassChain::leads_to`]).
+#[allow(clippy::too_many_arguments)]
+pub fn delta_through_glass(
+    scene: &Scene,
+    light: &Light,
+    sample: &LightSample,
+    u: [u64; 2],
+    pmf: f32,
+    scattering: &Scattering,
+    p: Vec3A,
+    most: usize,
+    counters: &mut RayCounters,
+) -> Rgb {
+    let Some(chain) = connect_to(scene, p, scattering.sp.n_geom, delta_end(sample), most, counters) else {
+        return Rgb::ZERO;
+    };
+    let last = chain.vertex(chain.k - 1);
+    let f = scattering.sp.eval_cos(to_f32((chain.vertex(0).x - chain.x0).normalize()));
+    // What the light sends along the chain's last segment: irradiance across the beam of a
+    // directional light, the intensity (radiance there × distance²) of a point or spot.
+    let Some(seen) = light.sample_li(to_f32(last.x), u, &scene.images) else { return Rgb::ZERO };
+    let emitted = match chain.end {
+        End::Point(y) => seen.radiance * (last.x - y).length_squared() as f32,
+        End::Direction(_) => seen.radiance,
+    };
+    if f == Rgb::ZERO || emitted == Rgb::ZERO {
+        return Rgb::ZERO;
+    }
+    let Some(density) = delta_density(&chain) else { return Rgb::ZERO };
+    if !light_reaches(scene, &chain, counters) {
+        return Rgb::ZERO;
+    }
+    f * passage(&chain).0 * emitted * (density as f32 / pmf)
 }
 
 /// A surface a path left where next-event estimation looks through glass.
@@ -498,6 +647,36 @@ pub struct GlassChain {
 }
 
 impl GlassChain {
+    /// Whether the path came along it from a receiver.
+    #[inline]
+    pub fn from_receiver(&self) -> bool {
+        self.from.is_some()
+    }
+
+    /// Whether the solved `chain` is this one: as many refractions, each where the path's
+    /// was (the solve stops within 10⁻³ of Snell's law, the glass's narrowest lobe bends
+    /// within about as much).
+    fn is(&self, chain: &Chain) -> bool {
+        let Some(from) = self.from else { return false };
+        chain.k == self.k
+            && (0..self.k).all(|i| {
+                let (solved, taken) = (to_f32(chain.vertex(i).x), self.vertices[i]);
+                (solved - taken).length() <= 1e-2 * (taken - from.ctx.p).length()
+            })
+    }
+
+    /// Whether next-event estimation to the delta light of `sample` at the smooth glass at
+    /// `p` (which this chain reached) would count light [`delta_through_glass`] counted at
+    /// the receiver: the connection from there finds this very chain, `p` its last
+    /// refraction.
+    pub fn leads_to(&self, scene: &Scene, p: Vec3A, sample: &LightSample, counters: &mut RayCounters) -> bool {
+        let path = self.through(p);
+        let Some(from) = path.from else { return false };
+        // The path is within its depth, so the connection had room for its chain.
+        connect_to(scene, from.ctx.p, from.n_geom, delta_end(sample), MAX_CASTERS, counters)
+            .is_some_and(|chain| path.is(&chain))
+    }
+
     /// A path leaving a receiver at `ctx` (geometric normal `n_geom`; next-event estimation
     /// took every light there: `every_light`) in a direction its scattering chose with
     /// density `pdf`.
@@ -534,14 +713,7 @@ impl GlassChain {
         let Some(chain) = connect(scene, from.ctx.p, from.n_geom, hit.p, hit.n_geom, MAX_CASTERS, counters) else {
             return Some(1.0);
         };
-        // The same chain: as many refractions, each where the path's was (the solve stops
-        // within 10⁻³ of Snell's law, the glass's narrowest lobe within about as much).
-        let same = chain.k == self.k
-            && (0..self.k).all(|i| {
-                let (solved, taken) = (to_f32(chain.vertex(i).x), self.vertices[i]);
-                (solved - taken).length() <= 1e-2 * (taken - from.ctx.p).length()
-            });
-        if !same {
+        if !self.is(&chain) {
             return Some(1.0);
         }
         let pmf = strategy.selection_pmf(&from.ctx, LightId(id), from.every_light);
@@ -583,10 +755,8 @@ mod tests {
     fn assert_refracts(chain: &Chain) {
         for i in 0..chain.k {
             let v = chain.vertex(i);
-            let before = if i == 0 { chain.x0 } else { chain.vertex(i - 1).x };
-            let after = if i + 1 == chain.k { chain.y } else { chain.vertex(i + 1).x };
             let n = v.normal_at(v.x);
-            let (wo, wi) = ((before - v.x).normalize(), (after - v.x).normalize());
+            let (wo, wi) = chain.directions(chain.x0, &chain.positions(), chain.end, i);
             let sin = |w: DVec3| w.cross(n).length();
             let snell = v.ior_towards(wo) * sin(wo) - v.ior_towards(wi) * sin(wi);
             assert!(snell.abs() < 2e-3, "vertex {i}: η sin θ differ by {snell}");
@@ -623,6 +793,45 @@ mod tests {
             let (dx, dz) = (dir(Vec3A::X * h) - dir(-Vec3A::X * h), dir(Vec3A::Z * h) - dir(-Vec3A::Z * h));
             let brute = dx.cross(dz).length() / (4.0 * (h * h) as f64);
             assert!((g / brute - 1.0).abs() < 0.05, "case {k}: G {g} against {brute} by moving the light");
+        }
+    }
+
+    #[test]
+    fn the_density_of_a_delta_light_through_glass_is_what_moving_the_receiver_sweeps() {
+        let scene = ball_scene();
+        let mut counters = RayCounters::default();
+        // A point light above the ball, under the lamp (two refractions), and inside the
+        // ball (one); the sun from two slants that pass the lamp (two).
+        let ends = [
+            End::Point(DVec3::new(0.02, 1.45, -0.01)),
+            End::Point(DVec3::new(0.03, 0.8, 0.02)),
+            End::Direction(DVec3::new(0.15, 1.0, 0.1).normalize()),
+            End::Direction(DVec3::new(-0.2, 1.0, 0.1).normalize()),
+        ];
+        let p = Vec3A::new(0.06, 0.0, -0.04);
+        for (k, end) in ends.into_iter().enumerate() {
+            let chain = connect_to(&scene, p, Vec3A::Y, end, MAX_CASTERS, &mut counters).expect("a chain");
+            assert_refracts(&chain);
+            let density = delta_density(&chain).unwrap();
+            // By brute force: move the receiver by ±h across the first direction (on the floor,
+            // then projected: a receiver's area across ω₀ is its floor area × |cos|), solve
+            // again, and measure what the light's side sweeps. 2 cm: the solves stop within
+            // 10⁻³ of Snell's law, whose scatter a smaller step would measure instead.
+            let h = 2e-2;
+            let w0 = (chain.vertex(0).x - chain.x0).normalize();
+            let mut swept = |d: Vec3A| {
+                let c = connect_to(&scene, p + d, Vec3A::Y, end, MAX_CASTERS, &mut counters).expect("a moved chain");
+                let last = c.vertex(c.k - 1).x;
+                match end {
+                    End::Point(y) => (last - y).normalize(),
+                    End::Direction(w) => last - w * last.dot(w),
+                }
+            };
+            let (dx, dz) = (swept(Vec3A::X * h) - swept(-Vec3A::X * h), swept(Vec3A::Z * h) - swept(-Vec3A::Z * h));
+            let floor_area = 4.0 * (h * h) as f64;
+            let across = floor_area * w0.y.abs();
+            let brute = dx.cross(dz).length() / across;
+            assert!((density / brute - 1.0).abs() < 0.05, "case {k}: density {density} against {brute}");
         }
     }
 }

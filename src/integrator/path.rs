@@ -9,7 +9,7 @@
 
 use super::direct::estimate_direct;
 use super::guided::Scattering;
-use super::mnee::{GlassChain, MAX_CASTERS};
+use super::mnee::{AtVertex, GlassChain, MAX_CASTERS};
 use super::timing::timed;
 use super::transmittance;
 use super::{RayCounters, Tally};
@@ -287,9 +287,12 @@ impl Tracer<'_> {
 
             if !scene.lights.is_empty() {
                 // A light reached through k refractions ends a path k vertices deeper.
-                let refractions = if receiver { MAX_CASTERS.min((max_depth - depth - 1) as usize) } else { 0 };
-                let direct = beta
-                    * estimate_direct(scene, strategy, &scattering, hit.p, medium, refractions, stream, depth, tally);
+                let at = AtVertex {
+                    refractions: if receiver { MAX_CASTERS.min((max_depth - depth - 1) as usize) } else { 0 },
+                    chain: Some(chain).filter(|c| glass.is_some() && c.from_receiver()),
+                };
+                let direct =
+                    beta * estimate_direct(scene, strategy, &scattering, hit.p, medium, at, stream, depth, tally);
                 l += clamped(direct, clamp.limit(depth >= 1));
             }
 

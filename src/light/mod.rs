@@ -137,6 +137,14 @@ impl Light {
         matches!(self, Light::Triangle(_) | Light::Quad(_))
     }
 
+    /// Whether next-event estimation connects it through smooth glass: emissive surfaces by
+    /// their points, point and directional lights as they are (a spot's cone would gate
+    /// the connection by the straight way rather than by its last segment).
+    #[inline]
+    pub fn connects_through_glass(&self) -> bool {
+        matches!(self, Light::Triangle(_) | Light::Quad(_) | Light::Point(_) | Light::Distant(_))
+    }
+
     /// The density per unit area with which [`Light::area_point`] chooses its points.
     #[inline]
     pub fn area_pdf(&self) -> Option<f32> {

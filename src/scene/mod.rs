@@ -102,8 +102,8 @@ pub struct Scene {
     /// Radius of that sphere (sizes directional lights' power).
     pub radius: f32,
     /// Whether next-event estimation looks for light through smooth glass
-    /// ([`crate::integrator::mnee`]): some material is smooth glass and some light an
-    /// emissive surface.
+    /// ([`crate::integrator::mnee`]): some material is smooth glass and some light one it
+    /// connects ([`Light::connects_through_glass`]).
     pub caustics: bool,
 }
 

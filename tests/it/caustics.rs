@@ -6,6 +6,7 @@ use crate::common::{TestScene, scene_from};
 use crate::render::render_with;
 use myriad::material::Material;
 use myriad::math::{Mat4, Rgb, UVec2, Vec3A};
+use myriad::scene::description::LightDesc;
 use myriad::scene::shapes::{quad_mesh, sphere_mesh};
 use myriad::settings::LightSamplerKind;
 
@@ -103,4 +104,64 @@ fn light_through_smooth_glass_is_solved_for_and_is_what_bsdf_sampling_finds() {
             assert!(gain > least, "solving for the refractions must pay: variance only {gain}× lower");
         }
     }
+}
+
+/// A grey floor under a smooth glass ball (radius 0.5, centre 0.8 m up) in the sun from
+/// nearly straight above, seen low from the side at 32 × 24 pixels; `as_surface`: the sun
+/// made an emissive quad of the same irradiance, 1 m² at 30 m.
+fn sunlit_ball(as_surface: bool) -> TestScene {
+    let floor = Material::diffuse("floor", Rgb::splat(0.8));
+    let glass = Material { transmission: 1.0, roughness: 0.0, ior: 1.5, ..Material::diffuse("glass", Rgb::ONE) };
+    let mut meshes = vec![
+        (quad_mesh("floor", Vec3A::new(-3.0, 0.0, -3.0), Vec3A::Z * 6.0, Vec3A::X * 6.0, 0), Mat4::IDENTITY),
+        (sphere_mesh("ball", Vec3A::new(0.0, 0.8, 0.0), 0.5, 4, 1), Mat4::IDENTITY),
+    ];
+    let (towards_sun, irradiance) = (Vec3A::new(0.05, 1.0, 0.02).normalize(), 2.0);
+    let mut lights = vec![];
+    let mut emission = Rgb::ZERO;
+    if as_surface {
+        // 1 m² at 30 m: 1/900 sr, so radiance 900 × the irradiance.
+        let (a, b) = towards_sun.any_orthonormal_pair();
+        let (a, b) = if a.cross(b).dot(towards_sun) > 0.0 { (b, a) } else { (a, b) };
+        meshes.push((quad_mesh("sun", towards_sun * 30.0 - (a + b) * 0.5, a, b, 2), Mat4::IDENTITY));
+        emission = Rgb::splat(irradiance * 900.0);
+    } else {
+        lights.push(LightDesc::Directional {
+            name: "sun".into(),
+            direction: -towards_sun,
+            irradiance: Rgb::splat(irradiance),
+            angle: 0.0,
+            camera_visible: false,
+        });
+    }
+    let emitter = Material { emission, double_sided: false, ..Material::diffuse("emitter", Rgb::ZERO) };
+    // Low, from the side: the caustic under the ball is seen directly, not through the ball
+    // (which would show the sharp one brighter than the blurred one by refocusing it).
+    let eye = Vec3A::new(2.5, 0.45, 0.3);
+    scene_from(vec![floor, glass, emitter], meshes, lights, eye, Vec3A::ZERO, UVec2::new(32, 24))
+}
+
+#[test]
+fn the_sun_through_smooth_glass_is_solved_for_as_the_emitter_it_stands_for() {
+    // Smooth glass leaves a delta light's caustic to next-event estimation at the glass, which
+    // never lines up with it: without the connection the light through the ball is lost.
+    // With it the picture is that of a small, far emissive quad of the same irradiance, whose
+    // connections the tests above compare with BSDF sampling. (A point light against a small
+    // emissive sphere cannot be compared so: the sphere is seen through the ball. The point's
+    // density is checked against moving the receiver in integrator::mnee's unit test.)
+    let mut sun = sunlit_ball(false);
+    assert!(sun.caustics, "smooth glass and a delta light: a connection to make");
+    let solved = region_means(&mut sun, true, 300);
+    let lost = region_means(&mut sun, false, 400);
+    let surface = region_means(&mut sunlit_ball(true), true, 500);
+    let ((ours, ours_var), (theirs, theirs_var)) = (image_spread(&solved), image_spread(&surface));
+    let (without, _) = image_spread(&lost);
+    let z = (ours - theirs) / (ours_var + theirs_var).sqrt();
+    eprintln!(
+        "sun: image mean {:.4} of the emitter's (t {z:.1}); without the connection {:.4}",
+        ours / theirs,
+        without / theirs
+    );
+    assert!(z.abs() < 5.84 && (ours / theirs - 1.0).abs() < 0.02, "image mean {} of the emitter's", ours / theirs);
+    assert!(without / ours < 0.99, "without the connection the caustic must be missing: {}", without / ours);
 }

@@ -209,7 +209,8 @@ pub fn build(mut desc: SceneDescription, opts: &BuildOptions) -> Result<(Scene, 
     stats.record(&desc, &geometry, &lights, start);
     let lamps = Lamps::new(&lights);
     let suns = (0..lights.len() as u32).filter(|&i| matches!(lights[i as usize], Light::Sun(_))).collect();
-    let caustics = materials.iter().any(|m| m.smooth_glass().is_some()) && lights.iter().any(Light::is_surface);
+    let caustics =
+        materials.iter().any(|m| m.smooth_glass().is_some()) && lights.iter().any(Light::connects_through_glass);
     let scene =
         Scene { camera, geometry, materials, images, lights, environment, lamps, suns, center, radius, caustics };
     let report = SceneReport {
