@@ -1,0 +1,267 @@
+//! Manifold next-event estimation: light reaching a surface through smooth glass.
+//!
+//! A light sample on an emissive surface that only smooth solid glass
+//! ([`Material::smooth_glass`](crate::material::Material::smooth_glass)) blocks is not given
+//! up. The refractions the straight segment makes through the glass seed a chain of vertices
+//! that Newton's method walks over the glass until each one obeys Snell's law (Hanika, Droske
+//! and Fascione 2015, *Manifold next event estimation*; Cycles' shadow caustics). The light
+//! then arrives along the chain with the generalised geometry term G: the density of the
+//! direction it leaves the receiver in per unit area of the light, by the implicit function
+//! theorem on the chain's constraints. A point or directional light behind smooth glass is
+//! connected the same way, the chain ending at its point or direction and carrying instead
+//! the density of its directions (or of its beam) at the receiver; BSDF sampling cannot find
+//! such light, so next-event estimation at the glass leaves the connection the chains it
+//! solves to ([`GlassChain::leads_to`]).
+//!
+//! BSDF sampling finds the same paths (a receiver, 1 to [`MAX_CASTERS`] refractions through
+//! smooth glass, an emissive surface), and each strategy is good where the other is poor:
+//! where the glass focuses light (a caustic's bright core) G is large and varies fast over
+//! the light, and BSDF sampling hits the light easily; where it spreads light thin, only
+//! the solved connection finds it. So the two are weighed by the power heuristic, both
+//! densities per unit area of the light: the connection's is the light's selection pmf ×
+//! its point density, BSDF sampling's the receiver's density of the first direction × the
+//! probability of refracting at each vertex × G ([`GlassChain`] follows a path's chain to
+//! weigh the light it meets). What is lost: light along chains the connection does not
+//! find — one whose straight seed crosses anything but smooth glass, one Newton's method
+//! does not solve, a second solution of the same seed — keeps
+//! only its BSDF-sampled share.
+//!
+//! Against Cycles: it serves emissive triangles and quads (Cycles only lamps; glTF scenes
+//! bring their light in meshes) and weighs by MIS where Cycles leaves every such path to
+//! the connection and clamps G at 2; casters and receivers follow from the materials rather
+//! than object flags; the constraints' derivatives are forward differences in f64 (analytic
+//! in Cycles). `chain.rs` solves the chains; this file weighs and adds up what they bring.
+
+mod chain;
+
+use self::chain::{
+    Chain, End, connect, connect_to, delta_density, geometry_term, passage, ray_from_surface, to_f32, to_f64,
+};
+use super::RayCounters;
+use super::guided::Scattering;
+use crate::geometry::SurfaceHit;
+use crate::light::{AreaPoint, Light, LightId, LightSample};
+use crate::light_sampler::{LightStrategy, ShadingContext};
+use crate::math::{Rgb, Vec3A, power_heuristic};
+use crate::scene::Scene;
+
+/// Most refractions a chain may have.
+pub const MAX_CASTERS: usize = 4;
+
+/// The power-heuristic weight of the connection along a solved `chain` against BSDF
+/// sampling, both as densities per unit area of the light: `light_pdf` (selection pmf ×
+/// point density) against `bsdf_pdf` (the receiver's density of the chain's first
+/// direction) × refracting at every vertex × G. Also G.
+fn connection_weight(
+    chain: &Chain,
+    n_y: Vec3A,
+    light_pdf: f32,
+    bsdf_pdf: impl FnOnce(Vec3A) -> f32,
+) -> Option<(f32, f32)> {
+    let g = geometry_term(chain, to_f64(n_y))? as f32;
+    let (_, probability) = passage(chain);
+    let wi = to_f32((chain.vertex(0).x - chain.x0).normalize());
+    Some((power_heuristic(light_pdf, bsdf_pdf(wi) * probability * g), g))
+}
+
+/// Light from an emissive surface, sampled at `point`, reaching the surface `scattering` at
+/// `p` through smooth glass, divided by the point's density and the light's selection
+/// probability `pmf` and weighed against BSDF sampling; zero when no chain of at most `most`
+/// refractions connects them (a path through more would end before it reached the light:
+/// its depth counts each one) or it is blocked.
+pub fn through_glass(
+    scene: &Scene,
+    point: &AreaPoint,
+    pmf: f32,
+    scattering: &Scattering,
+    p: Vec3A,
+    most: usize,
+    counters: &mut RayCounters,
+) -> Rgb {
+    let Some(chain) = connect(scene, p, scattering.sp.n_geom, point.p, point.n, most, counters) else {
+        return Rgb::ZERO;
+    };
+    let last = chain.vertex(chain.k - 1);
+    let f = scattering.sp.eval_cos(to_f32((chain.vertex(0).x - chain.x0).normalize()));
+    let le = point.emission.radiance_towards(point.n, to_f32(-chain.end.seen_from(last.x)));
+    if f == Rgb::ZERO || le == Rgb::ZERO {
+        return Rgb::ZERO;
+    }
+    let light_pdf = pmf * point.pdf;
+    let Some((weight, g)) = connection_weight(&chain, point.n, light_pdf, |wi| scattering.pdf(wi)) else {
+        return Rgb::ZERO;
+    };
+    if !light_reaches(scene, &chain, counters) {
+        return Rgb::ZERO;
+    }
+    f * passage(&chain).0 * le * (g * weight / light_pdf)
+}
+
+/// Whether nothing blocks the chain's last segment, from its last refraction to the light.
+fn light_reaches(scene: &Scene, chain: &Chain, counters: &mut RayCounters) -> bool {
+    let last = chain.vertex(chain.k - 1);
+    let (ray, t_max) = ray_from_surface(to_f32(last.x), to_f32(last.n_geom), chain.end);
+    counters.shadow_rays += 1;
+    !scene.occluded(&ray, t_max)
+}
+
+/// Whether the connection through glass serves `light` as a delta light (point and
+/// directional lights; spots keep next-event estimation at the glass).
+#[inline]
+pub fn connects_delta(light: &Light) -> bool {
+    light.is_delta() && light.connects_through_glass()
+}
+
+/// What next-event estimation at a vertex has to do with smooth glass.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct AtVertex {
+    /// How many refractions through smooth glass a light sample may be connected through
+    /// here: 0 where the vertex is no receiver or the path has no depth left for one.
+    pub refractions: usize,
+    /// At smooth glass that a path reached along a chain from a receiver: that chain.
+    pub chain: Option<GlassChain>,
+}
+
+/// Where a delta light (point, spot or directional) is, for a chain to end at.
+fn delta_end(sample: &LightSample) -> End {
+    if sample.distance.is_infinite() { End::Direction(to_f64(sample.wi)) } else { End::Point(to_f64(sample.p)) }
+}
+
+/// Light from the delta light `light` (its sample from `p`: `sample`) reaching the surface
+/// `scattering` at `p` through at most `most` refractions of smooth glass, divided by the
+/// light's selection probability `pmf`; zero when no chain connects them or it is blocked.
+/// BSDF sampling cannot find such light, so it takes it all; next-event estimation at the
+/// glass along the same chain takes none ([`GlassChain::leads_to`]).
+#[allow(clippy::too_many_arguments)]
+pub fn delta_through_glass(
+    scene: &Scene,
+    light: &Light,
+    sample: &LightSample,
+    u: [u64; 2],
+    pmf: f32,
+    scattering: &Scattering,
+    p: Vec3A,
+    most: usize,
+    counters: &mut RayCounters,
+) -> Rgb {
+    let Some(chain) = connect_to(scene, p, scattering.sp.n_geom, delta_end(sample), most, counters) else {
+        return Rgb::ZERO;
+    };
+    let last = chain.vertex(chain.k - 1);
+    let f = scattering.sp.eval_cos(to_f32((chain.vertex(0).x - chain.x0).normalize()));
+    // What the light sends along the chain's last segment: irradiance across the beam of a
+    // directional light, the intensity (radiance there × distance²) of a point or spot.
+    let Some(seen) = light.sample_li(to_f32(last.x), u, &scene.images) else { return Rgb::ZERO };
+    let emitted = match chain.end {
+        End::Point(y) => seen.radiance * (last.x - y).length_squared() as f32,
+        End::Direction(_) => seen.radiance,
+    };
+    if f == Rgb::ZERO || emitted == Rgb::ZERO {
+        return Rgb::ZERO;
+    }
+    let Some(density) = delta_density(&chain) else { return Rgb::ZERO };
+    if !light_reaches(scene, &chain, counters) {
+        return Rgb::ZERO;
+    }
+    f * passage(&chain).0 * emitted * (density as f32 / pmf)
+}
+
+/// A surface a path left where next-event estimation looks through glass.
+#[derive(Clone, Copy, Debug)]
+struct Receiver {
+    /// Its light-selection context, and whether next-event estimation there took every light.
+    ctx: ShadingContext,
+    every_light: bool,
+    /// Its geometric normal.
+    n_geom: Vec3A,
+    /// The density with which its scattering chose the direction the path left in.
+    pdf: f32,
+}
+
+/// A path's chain of refractions through smooth glass since it last left a receiver, for
+/// the weight of the light it may meet at the chain's end against [`through_glass`].
+#[derive(Clone, Copy, Debug, Default)]
+pub struct GlassChain {
+    /// The receiver; `None` when the path has since met anything but smooth glass it
+    /// refracted through, or more of it than a chain may have.
+    from: Option<Receiver>,
+    /// Where it refracted.
+    vertices: [Vec3A; MAX_CASTERS],
+    k: usize,
+}
+
+impl GlassChain {
+    /// Whether the path came along it from a receiver.
+    #[inline]
+    pub fn from_receiver(&self) -> bool {
+        self.from.is_some()
+    }
+
+    /// Whether the solved `chain` is this one: as many refractions, each where the path's
+    /// was (the solve stops within 10⁻³ of Snell's law, the glass's narrowest lobe bends
+    /// within about as much).
+    fn is(&self, chain: &Chain) -> bool {
+        let Some(from) = self.from else { return false };
+        chain.k == self.k
+            && (0..self.k).all(|i| {
+                let (solved, taken) = (to_f32(chain.vertex(i).x), self.vertices[i]);
+                (solved - taken).length() <= 1e-2 * (taken - from.ctx.p).length()
+            })
+    }
+
+    /// Whether next-event estimation to the delta light of `sample` at the smooth glass at
+    /// `p` (which this chain reached) would count light [`delta_through_glass`] counted at
+    /// the receiver: the connection from there finds this very chain, `p` its last
+    /// refraction.
+    pub fn leads_to(&self, scene: &Scene, p: Vec3A, sample: &LightSample, counters: &mut RayCounters) -> bool {
+        let path = self.through(p);
+        let Some(from) = path.from else { return false };
+        // The path is within its depth, so the connection had room for its chain.
+        connect_to(scene, from.ctx.p, from.n_geom, delta_end(sample), MAX_CASTERS, counters)
+            .is_some_and(|chain| path.is(&chain))
+    }
+
+    /// A path leaving a receiver at `ctx` (geometric normal `n_geom`; next-event estimation
+    /// took every light there: `every_light`) in a direction its scattering chose with
+    /// density `pdf`.
+    #[inline]
+    pub fn leaving(ctx: ShadingContext, every_light: bool, n_geom: Vec3A, pdf: f32) -> Self {
+        Self { from: Some(Receiver { ctx, every_light, n_geom, pdf }), ..Self::default() }
+    }
+
+    /// The chain, one refraction through smooth glass at `p` longer.
+    #[inline]
+    pub fn through(mut self, p: Vec3A) -> Self {
+        if self.from.is_none() || self.k == MAX_CASTERS {
+            return Self::default();
+        }
+        self.vertices[self.k] = p;
+        self.k += 1;
+        self
+    }
+
+    /// The MIS weight of the light emitted at `hit` by light `id` against [`through_glass`]
+    /// from the receiver, or `None` when the path did not reach it along a chain from one.
+    /// Where the connection would not have found this very chain, BSDF sampling's weight is 1.
+    pub fn weight(
+        &self,
+        scene: &Scene,
+        strategy: &LightStrategy,
+        hit: &SurfaceHit,
+        id: u32,
+        counters: &mut RayCounters,
+    ) -> Option<f32> {
+        let from = self.from.filter(|_| self.k > 0)?;
+        let area_pdf = scene.lights[id as usize].area_pdf()?;
+        // The path reached the light within its depth, so the connection had room for its chain.
+        let Some(chain) = connect(scene, from.ctx.p, from.n_geom, hit.p, hit.n_geom, MAX_CASTERS, counters) else {
+            return Some(1.0);
+        };
+        if !self.is(&chain) {
+            return Some(1.0);
+        }
+        let pmf = strategy.selection_pmf(&from.ctx, LightId(id), from.every_light);
+        let weight = connection_weight(&chain, hit.n_geom, pmf * area_pdf, |_| from.pdf).map_or(0.0, |(w, _)| w);
+        Some(1.0 - weight)
+    }
+}
