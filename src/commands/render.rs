@@ -307,6 +307,14 @@ impl fmt::Display for RenderReport {
             st.rays.shadow_rays
         )?;
         write_time_shares(f, &st.rays.time)?;
+        if s.caustics {
+            let (tried, solved) = (st.rays.glass_tried, st.rays.glass_solved);
+            writeln!(
+                f,
+                "caustics   {tried} light samples behind smooth glass, {solved} reached through it ({:.0} %)",
+                100.0 * solved as f64 / tried.max(1) as f64
+            )?;
+        }
         if self.sampler == LightSamplerKind::Cells && self.cells.is_none() && !s.lights.is_empty() {
             let lights = self.loaded.scene.lights.len();
             let chose = if lights <= crate::light_sampler::EVERY_LIGHT_UP_TO {

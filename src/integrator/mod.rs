@@ -44,6 +44,11 @@ pub struct RayCounters {
     pub rays: u64,
     /// Occlusion (shadow) rays.
     pub shadow_rays: u64,
+    /// Light samples behind smooth glass for which a connection through it was tried
+    /// ([`mnee`]).
+    pub glass_tried: u64,
+    /// Those of them it brought light along.
+    pub glass_solved: u64,
     /// Ticks per phase of the timed paths.
     pub time: timing::PhaseTimes,
     /// Whether the path being traced is timed ([`timing::is_timed`]).
@@ -64,6 +69,8 @@ impl RayCounters {
     pub fn add(&mut self, other: &RayCounters) {
         self.rays += other.rays;
         self.shadow_rays += other.shadow_rays;
+        self.glass_tried += other.glass_tried;
+        self.glass_solved += other.glass_solved;
         self.time.add(&other.time);
     }
 

@@ -2,8 +2,9 @@
 //! (`integrator::mnee`), and what it finds is the light BSDF sampling finds along the same
 //! paths, with far less noise.
 
-use crate::common::{TestScene, scene_from};
+use crate::common::{TestScene, blender, scene_from};
 use crate::render::render_with;
+use crate::split::{myriad, text};
 use myriad::material::Material;
 use myriad::math::{Mat4, Rgb, UVec2, Vec3A};
 use myriad::scene::description::LightDesc;
@@ -164,4 +165,30 @@ fn the_sun_through_smooth_glass_is_solved_for_as_the_emitter_it_stands_for() {
     );
     assert!(z.abs() < 5.84 && (ours / theirs - 1.0).abs() < 0.02, "image mean {} of the emitter's", ours / theirs);
     assert!(without / ours < 0.99, "without the connection the caustic must be missing: {}", without / ours);
+}
+
+#[test]
+fn info_and_the_summary_say_what_is_solved_for_through_glass() {
+    let dir = tempfile::tempdir().unwrap();
+    let glass = blender("glass.glb");
+    let glass = glass.to_str().unwrap();
+    let out = myriad(&["info", glass], dir.path());
+    assert!(text(&out).contains("caustics     light from emissive surfaces, point and directional lights through smooth glass ('clear_glass', 'tinted_glass', 'globe_glass')"), "{}", text(&out));
+    let out = myriad(&["render", glass, "--spp", "2", "--resolution", "32x24"], dir.path());
+    assert!(out.status.success(), "{}", text(&out));
+    let line = text(&out).lines().find(|l| l.starts_with("caustics")).map(str::to_string).unwrap_or_default();
+    let numbers: Vec<u64> = line.split_whitespace().filter_map(|w| w.parse().ok()).collect();
+    assert!(
+        line.contains("light samples behind smooth glass")
+            && numbers.len() == 2
+            && numbers[1] > 0
+            && numbers[1] <= numbers[0],
+        "{line}"
+    );
+    // Without smooth glass: a line in `info` that says so, none in the summary.
+    let materials = blender("materials.glb");
+    let materials = materials.to_str().unwrap();
+    assert!(text(&myriad(&["info", materials], dir.path())).contains("caustics     no smooth solid glass"));
+    let out = myriad(&["render", materials, "--spp", "1", "--resolution", "16x12"], dir.path());
+    assert!(!text(&out).lines().any(|l| l.starts_with("caustics")), "{}", text(&out));
 }

@@ -78,6 +78,7 @@ pub fn through_glass(
     most: usize,
     counters: &mut RayCounters,
 ) -> Rgb {
+    counters.glass_tried += 1;
     let Some(chain) = connect(scene, p, scattering.sp.n_geom, point.p, point.n, most, counters) else {
         return Rgb::ZERO;
     };
@@ -94,6 +95,7 @@ pub fn through_glass(
     if !light_reaches(scene, &chain, counters) {
         return Rgb::ZERO;
     }
+    counters.glass_solved += 1;
     f * passage(&chain).0 * le * (g * weight / light_pdf)
 }
 
@@ -144,6 +146,7 @@ pub fn delta_through_glass(
     most: usize,
     counters: &mut RayCounters,
 ) -> Rgb {
+    counters.glass_tried += 1;
     let Some(chain) = connect_to(scene, p, scattering.sp.n_geom, delta_end(sample), most, counters) else {
         return Rgb::ZERO;
     };
@@ -163,6 +166,7 @@ pub fn delta_through_glass(
     if !light_reaches(scene, &chain, counters) {
         return Rgb::ZERO;
     }
+    counters.glass_solved += 1;
     f * passage(&chain).0 * emitted * (density as f32 / pmf)
 }
 
