@@ -16,15 +16,17 @@ use myriad::settings::LightSamplerKind;
 const SPP: u32 = 512;
 const SEEDS: u64 = 4;
 
-/// A grey floor under a smooth glass ball (radius 0.5, centre 0.8 m up) with a small lamp
-/// facing down (an emissive quad) inside the ball (`inside`: one refraction between them)
-/// or above it (two), seen from above at 32 × 24 pixels.
+/// A grey floor under a smooth glass ball (radius 0.5, centre 0.8 m up) with a lamp facing
+/// down (an emissive quad): a small one inside the ball (`inside`: one refraction between
+/// them) or a large one above it (two), seen from above at 32 × 24 pixels. (A small lamp
+/// above the ball makes BSDF sampling alone too heavy-tailed to compare with: over 12 seeds
+/// its image mean stays 1.4 % under the connection's, where a 1.2 m lamp agrees to 0.1 %.)
 fn ball(inside: bool) -> TestScene {
     let floor = Material::diffuse("floor", Rgb::splat(0.8));
     let glass = Material { transmission: 1.0, roughness: 0.0, ior: 1.5, ..Material::diffuse("glass", Rgb::ONE) };
     let lamp =
         Material { emission: Rgb::new(40.0, 30.0, 20.0), double_sided: false, ..Material::diffuse("lamp", Rgb::ZERO) };
-    let (y, size) = if inside { (0.85, 0.2) } else { (1.6, 0.3) };
+    let (y, size) = if inside { (0.85, 0.2) } else { (1.6, 1.2) };
     let corner = Vec3A::new(-size / 2.0, y, -size / 2.0);
     let meshes = vec![
         (quad_mesh("floor", Vec3A::new(-3.0, 0.0, -3.0), Vec3A::Z * 6.0, Vec3A::X * 6.0, 0), Mat4::IDENTITY),
@@ -73,8 +75,8 @@ fn image_spread(runs: &[Vec<Rgb>]) -> (f64, f64) {
 
 #[test]
 fn light_through_smooth_glass_is_solved_for_and_is_what_bsdf_sampling_finds() {
-    // Above the ball much of the noise is the lamp's reflection in it, which both estimators
-    // leave to BSDF sampling: only inside must the solved connections pay.
+    // Above the ball BSDF sampling finds the large lamp well by itself: only inside must the
+    // solved connections pay.
     for (inside, least_gain) in [(true, Some(10.0)), (false, None)] {
         let mut scene = ball(inside);
         assert!(scene.caustics, "smooth glass and an emissive surface: the scene has caustics to solve for");
