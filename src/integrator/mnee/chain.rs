@@ -125,6 +125,11 @@ impl Chain {
         self.v[i].as_ref().expect("a vertex below k")
     }
 
+    /// The unit direction the chain leaves the receiver in.
+    pub(super) fn first_direction(&self) -> DVec3 {
+        (self.vertex(0).x - self.x0).normalize()
+    }
+
     /// The unit directions at vertex `i` (at `xs[i]`) towards the receiver at `x0` and
     /// towards the light at `end`, through the vertices at `xs`.
     fn directions(&self, x0: DVec3, xs: &[DVec3; MAX_CASTERS], end: End, i: usize) -> (DVec3, DVec3) {
@@ -258,14 +263,6 @@ pub(super) fn to_f64(v: Vec3A) -> DVec3 {
     DVec3::new(v.x as f64, v.y as f64, v.z as f64)
 }
 
-/// The ray from a point on a surface of front normal `n` towards `target`, leaving on the
-/// side it heads to.
-fn ray_between(from: Vec3A, n: Vec3A, target: Vec3A) -> Ray {
-    let side = if (target - from).dot(n) >= 0.0 { n } else { -n };
-    let origin = offset_ray_origin(from, side);
-    Ray::new(origin, target - origin)
-}
-
 /// The ray from `origin` to the light at `end` and how far along it the light is.
 fn ray_to(origin: Vec3A, end: End) -> (Ray, f32) {
     match end {
@@ -317,12 +314,11 @@ fn reproject(
 ) -> Option<Chain> {
     let mut next = *chain;
     for (i, &at) in proposed.iter().enumerate().take(chain.k) {
-        let target = to_f32(at);
         let ray = if i == 0 {
-            Ray::new(origin, target - origin)
+            ray_to(origin, End::Point(at)).0
         } else {
             let prev = next.vertex(i - 1);
-            ray_between(to_f32(prev.x), to_f32(prev.n_geom), target)
+            ray_from_surface(to_f32(prev.x), to_f32(prev.n_geom), End::Point(at)).0
         };
         counters.rays += 1;
         // Twice the distance: the proposal lies off the surface, on either side of it.
@@ -407,7 +403,7 @@ pub(super) fn geometry_term(chain: &Chain, n_y: DVec3) -> Option<f64> {
 /// direction ω₀, the receiver moving across it and the chain following. Without glass
 /// this is 1/d² and 1.
 pub(super) fn delta_density(chain: &Chain) -> Option<f64> {
-    let (a, b) = (chain.vertex(0).x - chain.x0).normalize().any_orthonormal_pair();
+    let (a, b) = chain.first_direction().any_orthonormal_pair();
     let d = chain.follow(a, b, true)?;
     let (i, last) = (chain.k - 1, chain.vertex(chain.k - 1));
     let dx = |col: usize| last.s * d[2 * i][col] + last.t * d[2 * i + 1][col];
@@ -551,7 +547,7 @@ mod tests {
             let h = 2e-3;
             let mut dir = |dy: Vec3A| {
                 let c = connect(&scene, p, Vec3A::Y, y + dy, n_y, MAX_CASTERS, &mut counters).expect("a moved chain");
-                (c.vertex(0).x - c.x0).normalize()
+                c.first_direction()
             };
             let (dx, dz) = (dir(Vec3A::X * h) - dir(-Vec3A::X * h), dir(Vec3A::Z * h) - dir(-Vec3A::Z * h));
             let brute = dx.cross(dz).length() / (4.0 * (h * h) as f64);
@@ -581,7 +577,7 @@ mod tests {
             // again, and measure what the light's side sweeps. 2 cm: the solves stop within
             // 10⁻³ of Snell's law, whose scatter a smaller step would measure instead.
             let h = 2e-2;
-            let w0 = (chain.vertex(0).x - chain.x0).normalize();
+            let w0 = chain.first_direction();
             let mut swept = |d: Vec3A| {
                 let c = connect_to(&scene, p + d, Vec3A::Y, end, MAX_CASTERS, &mut counters).expect("a moved chain");
                 let last = c.vertex(c.k - 1).x;

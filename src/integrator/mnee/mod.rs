@@ -60,7 +60,7 @@ fn connection_weight(
 ) -> Option<(f32, f32)> {
     let g = geometry_term(chain, to_f64(n_y))? as f32;
     let (_, probability) = passage(chain);
-    let wi = to_f32((chain.vertex(0).x - chain.x0).normalize());
+    let wi = to_f32(chain.first_direction());
     Some((power_heuristic(light_pdf, bsdf_pdf(wi) * probability * g), g))
 }
 
@@ -83,7 +83,7 @@ pub fn through_glass(
         return Rgb::ZERO;
     };
     let last = chain.vertex(chain.k - 1);
-    let f = scattering.sp.eval_cos(to_f32((chain.vertex(0).x - chain.x0).normalize()));
+    let f = scattering.sp.eval_cos(to_f32(chain.first_direction()));
     let le = point.emission.radiance_towards(point.n, to_f32(-chain.end.seen_from(last.x)));
     if f == Rgb::ZERO || le == Rgb::ZERO {
         return Rgb::ZERO;
@@ -151,7 +151,7 @@ pub fn delta_through_glass(
         return Rgb::ZERO;
     };
     let last = chain.vertex(chain.k - 1);
-    let f = scattering.sp.eval_cos(to_f32((chain.vertex(0).x - chain.x0).normalize()));
+    let f = scattering.sp.eval_cos(to_f32(chain.first_direction()));
     // What the light sends along the chain's last segment: irradiance across the beam of a
     // directional light, the intensity (radiance there × distance²) of a point or spot.
     let Some(seen) = light.sample_li(to_f32(last.x), u, &scene.images) else { return Rgb::ZERO };
