@@ -39,6 +39,9 @@ fn light_contribution(
     counters: &mut RayCounters,
     observe: impl FnOnce(f32, bool),
 ) -> Rgb {
+    if glass.smooth && light.is_delta() {
+        return Rgb::ZERO;
+    }
     let Some(ls) = light.sample_li(p, u, &scene.images) else { return Rgb::ZERO };
     let sp = &scattering.sp;
     let f = sp.eval_cos(ls.wi);
@@ -81,13 +84,6 @@ fn light_contribution(
     let unshadowed = f * ls.radiance * through / (pmf * ls.pdf);
     observe(luminance(unshadowed), !occluded);
     if occluded {
-        return Rgb::ZERO;
-    }
-    // Light the receiver's connection through this glass already brought.
-    if let Some(chain) = glass.chain
-        && mnee::connects_delta(light)
-        && chain.leads_to(scene, p, &ls, counters)
-    {
         return Rgb::ZERO;
     }
     let weight = if light.is_delta() { 1.0 } else { power_heuristic(pmf * ls.pdf, scattering.pdf(ls.wi)) };

@@ -265,7 +265,11 @@ impl Tracer<'_> {
                 break;
             }
             let material = &scene.materials[hit.material as usize];
-            let Some(bsdf) = material.bsdf(hit.uv, &scene.images, ray.dir.dot(hit.n_geom) < 0.0) else { break };
+            let glass = if scene.caustics { material.smooth_glass() } else { None };
+            // Glass on a chain from a receiver is crossed as the connection solves it: smooth.
+            let as_smooth = glass.is_some() && chain.from_receiver();
+            let entering = ray.dir.dot(hit.n_geom) < 0.0;
+            let Some(bsdf) = material.bsdf(hit.uv, &scene.images, entering, as_smooth) else { break };
             let n_shading = material.mapped_normal(
                 hit.n_shading,
                 || scene.geometry.position_derivatives(hit.triangle),
@@ -281,7 +285,6 @@ impl Tracer<'_> {
             );
             let sp = ShadingPoint::new(bsdf, hit.n_geom, n_shading, tangent, wo);
             let scattering = Scattering::new(sp, hit.p, guide);
-            let glass = if scene.caustics { material.smooth_glass() } else { None };
             // Where next-event estimation also looks through smooth glass: off it, outside it.
             let receiver = scene.caustics && glass.is_none() && medium == Rgb::ZERO;
 
@@ -289,7 +292,7 @@ impl Tracer<'_> {
                 // A light reached through k refractions ends a path k vertices deeper.
                 let at = AtVertex {
                     refractions: if receiver { MAX_CASTERS.min((max_depth - depth - 1) as usize) } else { 0 },
-                    chain: Some(chain).filter(|c| glass.is_some() && c.from_receiver()),
+                    smooth: as_smooth,
                 };
                 let direct =
                     beta * estimate_direct(scene, strategy, &scattering, hit.p, medium, at, stream, depth, tally);
@@ -304,7 +307,6 @@ impl Tracer<'_> {
             // Refracting into a solid glass object puts the ray in its volume; out of one, back
             // outside (objects are not nested).
             if bs.wi.dot(sp.n_geom) < 0.0 && !material.thin {
-                let entering = ray.dir.dot(hit.n_geom) < 0.0;
                 medium = if entering { material.absorption } else { Rgb::ZERO };
             }
             let left = Previous {

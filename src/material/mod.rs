@@ -145,9 +145,11 @@ impl BsdfAt {
 
 /// Glass up to this roughness counts as smooth for next-event estimation through it: its
 /// lobe (GGX α = 0.01, under a degree wide) bends light so nearly along Snell's law that a
-/// connection solved for the exact refraction stands for it; what is lost is the blur such
-/// glass gives a caustic where the connection carries it. glass.glb's tinted ball
-/// (roughness 0.05) is such glass.
+/// connection solved for the exact refraction stands for it. Paths from a receiver then
+/// cross it as smooth glass too (else next-event estimation at its rough vertices would
+/// count light the connection already brought: 8 % too much at roughness 0.1); what is lost
+/// is the blur such glass gives a caustic. glass.glb's tinted ball (roughness 0.05) is such
+/// glass.
 pub const SMOOTH_GLASS_ROUGHNESS: f32 = 0.1;
 
 /// Smooth solid glass ([`Material::smooth_glass`]).
@@ -432,11 +434,13 @@ impl Material {
 
     /// The BSDF at `uv` for a ray that meets the surface from its front (`entering`: into the
     /// object, for glass) or its back, or `None` when the surface reflects nothing (a black
-    /// emitter).
+    /// emitter). With `as_smooth`, smooth glass ([`Material::smooth_glass`]) scatters as if
+    /// its roughness were 0: what a path that next-event estimation through glass also
+    /// follows must meet (`integrator::mnee`).
     #[inline]
-    pub fn bsdf(&self, uv: Vec2, images: &[Image], entering: bool) -> Option<Bsdf> {
+    pub fn bsdf(&self, uv: Vec2, images: &[Image], entering: bool, as_smooth: bool) -> Option<Bsdf> {
         let base = self.base_color_at(uv, images);
-        let (mut metallic, mut roughness) = (self.metallic, self.roughness);
+        let (mut metallic, mut roughness) = (self.metallic, if as_smooth { 0.0 } else { self.roughness });
         if let Some(t) = &self.metallic_roughness_texture {
             let v = t.sample(images, uv);
             roughness *= v.y;

@@ -139,7 +139,7 @@ fn sample_weight_and_pdf_agree_with_eval() {
 fn a_dielectric_without_specular_is_exactly_lambertian() {
     let base = Rgb::new(0.73, 0.5, 0.1);
     let material = Material { roughness: 0.4, ..Material::diffuse("m", base) };
-    assert!(matches!(material.bsdf(Vec2::ZERO, &[], true), Some(Bsdf::Diffuse(d)) if d.albedo == base));
+    assert!(matches!(material.bsdf(Vec2::ZERO, &[], true, false), Some(Bsdf::Diffuse(d)) if d.albedo == base));
     // And the Principled model itself at specular 0 has no layer on its base.
     let a = principled(base, 0.0, 0.4, 1.5, 0.0, Rgb::ONE);
     let d = Diffuse { albedo: base };

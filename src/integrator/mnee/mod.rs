@@ -10,8 +10,8 @@
 //! theorem on the chain's constraints. A point or directional light behind smooth glass is
 //! connected the same way, the chain ending at its point or direction and carrying instead
 //! the density of its directions (or of its beam) at the receiver; BSDF sampling cannot find
-//! such light, so next-event estimation at the glass leaves the connection the chains it
-//! solves to ([`GlassChain::leads_to`]).
+//! such light. Paths from a receiver cross such glass as smooth glass (the connection stands
+//! for them; [`AtVertex::smooth`]), where no sample of a delta light can meet them.
 //!
 //! BSDF sampling finds the same paths (a receiver, 1 to [`MAX_CASTERS`] refractions through
 //! smooth glass, an emissive surface), and each strategy is good where the other is poor:
@@ -120,8 +120,12 @@ pub struct AtVertex {
     /// How many refractions through smooth glass a light sample may be connected through
     /// here: 0 where the vertex is no receiver or the path has no depth left for one.
     pub refractions: usize,
-    /// At smooth glass that a path reached along a chain from a receiver: that chain.
-    pub chain: Option<GlassChain>,
+    /// Whether the vertex is smooth glass a path from a receiver reached, which it crosses
+    /// as smooth (with roughness 0): no light sample of a delta light can meet it there.
+    /// (Next-event estimation at its slight roughness instead found a point or directional
+    /// light's caustics as rare fireflies, and counted again the chains the connection
+    /// solves.)
+    pub smooth: bool,
 }
 
 /// Where a delta light (point, spot or directional) is, for a chain to end at.
@@ -133,7 +137,7 @@ fn delta_end(sample: &LightSample) -> End {
 /// `scattering` at `p` through at most `most` refractions of smooth glass, divided by the
 /// light's selection probability `pmf`; zero when no chain connects them or it is blocked.
 /// BSDF sampling cannot find such light, so it takes it all; next-event estimation at the
-/// glass along the same chain takes none ([`GlassChain::leads_to`]).
+/// glass takes none ([`AtVertex::smooth`]).
 #[allow(clippy::too_many_arguments)]
 pub fn delta_through_glass(
     scene: &Scene,
@@ -211,18 +215,6 @@ impl GlassChain {
                 let (solved, taken) = (to_f32(chain.vertex(i).x), self.vertices[i]);
                 (solved - taken).length() <= 1e-2 * (taken - from.ctx.p).length()
             })
-    }
-
-    /// Whether next-event estimation to the delta light of `sample` at the smooth glass at
-    /// `p` (which this chain reached) would count light [`delta_through_glass`] counted at
-    /// the receiver: the connection from there finds this very chain, `p` its last
-    /// refraction.
-    pub fn leads_to(&self, scene: &Scene, p: Vec3A, sample: &LightSample, counters: &mut RayCounters) -> bool {
-        let path = self.through(p);
-        let Some(from) = path.from else { return false };
-        // The path is within its depth, so the connection had room for its chain.
-        connect_to(scene, from.ctx.p, from.n_geom, delta_end(sample), MAX_CASTERS, counters)
-            .is_some_and(|chain| path.is(&chain))
     }
 
     /// A path leaving a receiver at `ctx` (geometric normal `n_geom`; next-event estimation
