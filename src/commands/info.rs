@@ -127,13 +127,13 @@ impl fmt::Display for InfoReport {
             "caustics     {}",
             if s.caustics {
                 format!(
-                    "light from emissive surfaces, point and directional lights through smooth glass ({}) is solved for",
+                    "light from emissive surfaces, lamps, point and directional lights through smooth glass ({}) is solved for",
                     smooth.join(", ")
                 )
             } else if smooth.is_empty() {
                 "no smooth solid glass: nothing to solve for".into()
             } else {
-                "no emissive surface, point or directional light to solve for through smooth glass".into()
+                "no emissive surface, lamp, point or directional light to solve for through smooth glass".into()
             }
         )?;
         for (name, what) in &r.extensions {

@@ -45,9 +45,10 @@ fn light_contribution(
     let Some(ls) = light.sample_li(p, u, &scene.images) else { return Rgb::ZERO };
     let sp = &scattering.sp;
     let f = sp.eval_cos(ls.wi);
-    // A delta light behind glass is connected to whatever the straight way's cosine says.
-    let delta_through = glass.refractions > 0 && mnee::connects_delta(light);
-    if (f == Rgb::ZERO || !(ls.pdf > 0.0)) && !delta_through {
+    // A light behind glass is connected whatever the straight way's cosine says (BSDF
+    // sampling weighs its paths by whether the connection would have found them).
+    let behind_glass = glass.refractions > 0 && light.connects_through_glass();
+    if (f == Rgb::ZERO || !(ls.pdf > 0.0)) && !behind_glass {
         return Rgb::ZERO;
     }
     let origin = sp.ray_origin(p, ls.wi);
@@ -65,20 +66,22 @@ fn light_contribution(
     // towards the far side the ray leaves it at once.
     let inside = medium != Rgb::ZERO && ls.wi.dot(sp.n_geom) > 0.0;
     let through = if inside { super::transmittance(medium, ls.distance) } else { Rgb::ONE };
-    if occluded && delta_through {
-        let c = mnee::delta_through_glass(scene, light, &ls, u, pmf, scattering, p, glass.refractions, counters);
+    if occluded && behind_glass {
+        let most = glass.refractions;
+        let c = match light {
+            Light::Sphere(lamp) => mnee::lamp_through_glass(scene, lamp, &ls, pmf, scattering, p, most, counters),
+            _ if light.is_delta() => {
+                mnee::delta_through_glass(scene, light, &ls, u, pmf, scattering, p, most, counters)
+            }
+            _ => match light.area_point(u, &scene.images) {
+                Some(point) => mnee::through_glass(scene, &point, pmf, scattering, p, most, counters),
+                None => Rgb::ZERO,
+            },
+        };
         observe(luminance(c), c != Rgb::ZERO);
         return c;
     }
-    if occluded
-        && glass.refractions > 0
-        && let Some(point) = light.area_point(u, &scene.images)
-    {
-        let c = mnee::through_glass(scene, &point, pmf, scattering, p, glass.refractions, counters);
-        observe(luminance(c), c != Rgb::ZERO);
-        return c;
-    }
-    if f == Rgb::ZERO {
+    if f == Rgb::ZERO || !(ls.pdf > 0.0) {
         return Rgb::ZERO;
     }
     let unshadowed = f * ls.radiance * through / (pmf * ls.pdf);

@@ -98,15 +98,18 @@ fn escaped(
 
 /// Radiance from the lamps `ray` passes before `t_end` (lamps stop nothing: a path takes up
 /// each one's light and goes on), MIS-weighted against next-event estimation when the ray
-/// was found by BSDF sampling at `prev`; through the volume of absorption `medium` the ray
-/// travels in. A camera ray sees only camera-visible lamps.
+/// was found by BSDF sampling at `prev`, or against next-event estimation through glass
+/// when the path came along a `chain` of refractions from a receiver; through the volume of
+/// absorption `medium` the ray travels in. A camera ray sees only camera-visible lamps.
 #[inline]
+#[allow(clippy::too_many_arguments)]
 fn lamps_seen(
     scene: &Scene,
     strategy: &LightStrategy,
     ray: &Ray,
     t_end: f32,
     prev: Option<Previous>,
+    chain: GlassChain,
     medium: Rgb,
     counters: &mut RayCounters,
 ) -> Rgb {
@@ -117,7 +120,10 @@ fn lamps_seen(
             return;
         }
         let through = if medium != Rgb::ZERO { transmittance(medium, hit.t * ray.dir.length()) } else { Rgb::ONE };
-        let weight = bsdf_hit_weight(strategy, id, prev, |ctx| light.pdf_li(ctx.p, hit.p, hit.n), counters);
+        let weight = match chain.lamp_weight(scene, strategy, hit, id, counters) {
+            Some(w) => w,
+            None => bsdf_hit_weight(strategy, id, prev, |ctx| light.pdf_li(ctx.p, hit.p, hit.n), counters),
+        };
         l += hit.radiance * through * weight;
     });
     l
@@ -246,7 +252,7 @@ impl Tracer<'_> {
             let arriving = clamp.limit(depth >= 2);
             if !scene.lamps.is_empty() && (prev.is_some() || scene.lamps.camera_visible()) {
                 let t_end = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-                let seen = beta * lamps_seen(scene, strategy, &ray, t_end, prev, medium, counters);
+                let seen = beta * lamps_seen(scene, strategy, &ray, t_end, prev, chain, medium, counters);
                 l += clamped(seen, arriving);
             }
             let Some(hit) = hit else {

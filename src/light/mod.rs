@@ -137,12 +137,19 @@ impl Light {
         matches!(self, Light::Triangle(_) | Light::Quad(_))
     }
 
-    /// Whether next-event estimation connects it through smooth glass: emissive surfaces by
-    /// their points, point and directional lights as they are (a spot's cone would gate
-    /// the connection by the straight way rather than by its last segment).
+    /// Whether next-event estimation connects it through smooth glass: emissive surfaces and
+    /// point and spot lamps with a radius seen as a facing disk (Blender's default) by their
+    /// points, point, spot and directional lights as they are (a spot only where the straight
+    /// way from the receiver is inside its cone: its sample starts there). A sphere lamp's
+    /// points are sampled on the cap the receiver sees, which the glass turns away from the
+    /// chain: measured, its connections did not pay.
     #[inline]
     pub fn connects_through_glass(&self) -> bool {
-        matches!(self, Light::Triangle(_) | Light::Quad(_) | Light::Point(_) | Light::Distant(_))
+        match self {
+            Light::Triangle(_) | Light::Quad(_) | Light::Point(_) | Light::Spot(_) | Light::Distant(_) => true,
+            Light::Sphere(l) => l.model == LampModel::FacingDisk,
+            _ => false,
+        }
     }
 
     /// The density per unit area with which [`Light::area_point`] chooses its points.

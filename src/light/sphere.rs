@@ -77,16 +77,6 @@ impl SphereLight {
         self.model == LampModel::Sphere && (p - self.center).length_squared() <= self.radius * self.radius
     }
 
-    /// Radiance along the unit direction `omega` leaving the lamp (towards a receiver
-    /// outside): the spot cone's attenuation applied.
-    #[inline]
-    fn radiance_along(&self, omega: Vec3A) -> Rgb {
-        match &self.spot {
-            Some(cone) => self.radiance * cone.falloff(omega.dot(cone.direction)),
-            None => self.radiance,
-        }
-    }
-
     /// A point on the lamp as seen from `p` (two numbers in `[0,1)²`), with its solid-angle
     /// density; `None` where it sends nothing to `p`.
     #[inline]
@@ -169,6 +159,27 @@ impl SphereLight {
                 let r2 = self.radius * self.radius;
                 if dist2 > r2 { uniform_cone_pdf(one_minus_cos_cap(r2 / dist2)) } else { UNIFORM_SPHERE_PDF }
             }
+        }
+    }
+
+    /// For a disk facing each receiver: the density per unit area with which
+    /// [`sample_li`](Self::sample_li) from `p` picks the point `q` of the disk facing `p`
+    /// (zero outside a spot's cone as `p` sees `q`).
+    pub fn disk_pdf_from(&self, p: Vec3A, q: Vec3A) -> f32 {
+        debug_assert_eq!(self.model, LampModel::FacingDisk);
+        if self.radiance_along((p - q).normalize_or_zero()) == Rgb::ZERO {
+            return 0.0;
+        }
+        1.0 / (PI * self.radius * self.radius)
+    }
+
+    /// Radiance along the unit direction `omega` leaving the lamp (towards a receiver
+    /// outside): the spot cone's attenuation applied.
+    #[inline]
+    pub fn radiance_along(&self, omega: Vec3A) -> Rgb {
+        match &self.spot {
+            Some(cone) => self.radiance * cone.falloff(omega.dot(cone.direction)),
+            None => self.radiance,
         }
     }
 

@@ -5,9 +5,10 @@
 use crate::common::{TestScene, blender, scene_from};
 use crate::render::render_with;
 use crate::split::{myriad, text};
+use myriad::light::{LampModel, SpotCurve};
 use myriad::material::Material;
 use myriad::math::{Mat4, Rgb, UVec2, Vec3A};
-use myriad::scene::description::LightDesc;
+use myriad::scene::description::{LampShape, LightDesc};
 use myriad::scene::shapes::{quad_mesh, sphere_mesh};
 use myriad::settings::LightSamplerKind;
 
@@ -23,20 +24,34 @@ const SEEDS: u64 = 4;
 /// seeds its image mean stays 1.4 % under the connection's, where a 1.2 m lamp agrees to
 /// 0.1 %.)
 fn ball(inside: bool, roughness: f32) -> TestScene {
+    ball_lit(inside, roughness, None)
+}
+
+/// The same ball, lit by `lamp` instead of the quad when there is one.
+fn ball_lit(inside: bool, roughness: f32, lamp: Option<LightDesc>) -> TestScene {
     let floor = Material::diffuse("floor", Rgb::splat(0.8));
     let glass = Material { transmission: 1.0, roughness, ior: 1.5, ..Material::diffuse("glass", Rgb::ONE) };
-    let lamp =
+    let lamp_material =
         Material { emission: Rgb::new(40.0, 30.0, 20.0), double_sided: false, ..Material::diffuse("lamp", Rgb::ZERO) };
     let (y, size) = if inside { (0.85, 0.2) } else { (1.6, 1.2) };
     let corner = Vec3A::new(-size / 2.0, y, -size / 2.0);
-    let meshes = vec![
+    let mut meshes = vec![
         (quad_mesh("floor", Vec3A::new(-3.0, 0.0, -3.0), Vec3A::Z * 6.0, Vec3A::X * 6.0, 0), Mat4::IDENTITY),
         (sphere_mesh("ball", Vec3A::new(0.0, 0.8, 0.0), 0.5, 4, 1), Mat4::IDENTITY),
-        // Edges x then z: the front faces −y, down to the floor.
-        (quad_mesh("lamp", corner, Vec3A::X * size, Vec3A::Z * size, 2), Mat4::IDENTITY),
     ];
-    let eye = Vec3A::new(0.0, 3.0, 2.2);
-    scene_from(vec![floor, glass, lamp], meshes, vec![], eye, Vec3A::new(0.0, 0.0, 0.3), UVec2::new(32, 24))
+    if lamp.is_none() {
+        // Edges x then z: the front faces −y, down to the floor.
+        meshes.push((quad_mesh("lamp", corner, Vec3A::X * size, Vec3A::Z * size, 2), Mat4::IDENTITY));
+    }
+    // A lamp, unlike the quad, shines up too and is seen through the ball: its own noise
+    // (the pixels it covers in part) would hide the connection's gain, so its camera looks
+    // down on the floor beside the ball, lit only through the glass.
+    let (eye, at) = match lamp {
+        None => (Vec3A::new(0.0, 3.0, 2.2), Vec3A::new(0.0, 0.0, 0.3)),
+        Some(_) => (Vec3A::new(1.5, 2.0, 0.0), Vec3A::new(1.5, 0.0, 0.01)),
+    };
+    let lights = lamp.into_iter().collect();
+    scene_from(vec![floor, glass, lamp_material], meshes, lights, eye, at, UVec2::new(32, 24))
 }
 
 /// Per seed ([`SEEDS`] of them from `first`), the mean of every 4 × 4-pixel region (RGB), with
@@ -74,6 +89,38 @@ fn image_spread(runs: &[Vec<Rgb>]) -> (f64, f64) {
     (mean, totals.iter().map(|t| (t - mean) * (t - mean)).sum::<f64>() / ((n - 1.0) * n))
 }
 
+/// Renders `scene` with its light through glass solved for and with BSDF sampling alone
+/// ([`SEEDS`] each) and asserts that both agree (image mean and 4 × 4-pixel regions) and,
+/// with `least_gain`, that solving lowers the variance at least that many times.
+fn assert_solved_is_what_bsdf_sampling_finds(mut scene: TestScene, what: &str, least_gain: Option<f64>) {
+    assert!(scene.caustics, "{what}: smooth glass and a light behind it: the scene has caustics to solve for");
+    let (solved, sampled) = (region_means(&mut scene, true, 100), region_means(&mut scene, false, 200));
+    let (mut z2, mut our_var, mut their_var) = (0.0f64, 0.0, 0.0);
+    for ((m, v), (m2, v2)) in spread(&solved).iter().zip(&spread(&sampled)) {
+        for c in 0..3 {
+            let z = (m[c] - m2[c]) as f64 / ((v[c] + v2[c]) as f64).max(1e-12).sqrt();
+            z2 += z * z;
+        }
+        (our_var, their_var) = (our_var + v.element_sum() as f64, their_var + v2.element_sum() as f64);
+    }
+    let n = (3 * solved[0].len()) as f64;
+    let ((ours, ours_var), (theirs, theirs_var)) = (image_spread(&solved), image_spread(&sampled));
+    let z = (ours - theirs) / (ours_var + theirs_var).sqrt();
+    let gain = their_var / our_var;
+    eprintln!(
+        "{what}: image mean {:.4} of BSDF sampling's (z {z:.1}), regions' mean z² {:.2}, variance {gain:.1}× lower",
+        ours / theirs,
+        z2 / n
+    );
+    // Over 3 degrees of freedom a t statistic beyond 5.84 has probability 1 %.
+    assert!(z.abs() < 5.84, "{what}: image mean {} of BSDF sampling's: t = {z}", ours / theirs);
+    // And its square averages 3 (Welch's, roughly).
+    assert!(z2 / n < 3.0 + 5.0 * (6.0 / n).sqrt() + 0.5, "{what}: regions' mean z² {}", z2 / n);
+    if let Some(least) = least_gain {
+        assert!(gain > least, "{what}: solving for the refractions must pay: variance only {gain}× lower");
+    }
+}
+
 #[test]
 fn light_through_smooth_glass_is_solved_for_and_is_what_bsdf_sampling_finds() {
     // Above the ball BSDF sampling finds the large lamp well by itself: only inside must the
@@ -81,35 +128,66 @@ fn light_through_smooth_glass_is_solved_for_and_is_what_bsdf_sampling_finds() {
     // smooth by the paths the connection also finds (with next-event estimation at its
     // vertices on those paths as well, the lamp inside came out 8 % too bright).
     for (inside, roughness, least_gain) in [(true, 0.0, Some(10.0)), (true, 0.1, Some(10.0)), (false, 0.0, None)] {
-        let mut scene = ball(inside, roughness);
-        assert!(scene.caustics, "smooth glass and an emissive surface: the scene has caustics to solve for");
-        let (solved, sampled) = (region_means(&mut scene, true, 100), region_means(&mut scene, false, 200));
-        let (mut z2, mut our_var, mut their_var) = (0.0f64, 0.0, 0.0);
-        for ((m, v), (m2, v2)) in spread(&solved).iter().zip(&spread(&sampled)) {
-            for c in 0..3 {
-                let z = (m[c] - m2[c]) as f64 / ((v[c] + v2[c]) as f64).max(1e-12).sqrt();
-                z2 += z * z;
-            }
-            (our_var, their_var) = (our_var + v.element_sum() as f64, their_var + v2.element_sum() as f64);
-        }
-        let n = (3 * solved[0].len()) as f64;
-        let ((ours, ours_var), (theirs, theirs_var)) = (image_spread(&solved), image_spread(&sampled));
-        let z = (ours - theirs) / (ours_var + theirs_var).sqrt();
-        let gain = their_var / our_var;
-        eprintln!(
-            "lamp {} (roughness {roughness}): image mean {:.4} of BSDF sampling's (z {z:.1}), regions' mean z² {:.2}, variance {gain:.1}× lower",
-            if inside { "inside the ball" } else { "above the ball" },
-            ours / theirs,
-            z2 / n
-        );
-        // Over 3 degrees of freedom a t statistic beyond 5.84 has probability 1 %.
-        assert!(z.abs() < 5.84, "image mean {} of BSDF sampling's: t = {z}", ours / theirs);
-        // And its square averages 3 (Welch's, roughly).
-        assert!(z2 / n < 3.0 + 5.0 * (6.0 / n).sqrt() + 0.5, "regions' mean z² {}", z2 / n);
-        if let Some(least) = least_gain {
-            assert!(gain > least, "solving for the refractions must pay: variance only {gain}× lower");
-        }
+        let what =
+            format!("lamp {} (roughness {roughness})", if inside { "inside the ball" } else { "above the ball" });
+        assert_solved_is_what_bsdf_sampling_finds(ball(inside, roughness), &what, least_gain);
     }
+}
+
+#[test]
+fn blender_lamps_inside_smooth_glass_are_solved_for_too() {
+    // Blender's point lamp of radius 0.1 inside the ball, as its default disk facing each
+    // receiver (which turns to the last refraction of a chain), and a spot lamp (its cone
+    // towards the floor in view): BSDF sampling finds each by hitting it; the connection
+    // must agree and pay. (A sphere lamp is left to BSDF sampling: its connections, over
+    // the cap the receiver sees, did not lower the variance.)
+    let (position, intensity) = (Vec3A::new(0.05, 0.85, 0.0), Rgb::new(3.0, 2.5, 2.0));
+    let disk = LampShape { radius: 0.1, model: LampModel::FacingDisk, camera_visible: false };
+    let lamp = Some(disk);
+    let point = LightDesc::Point { name: "lamp".into(), position, intensity, lamp };
+    let spot = LightDesc::Spot {
+        name: "spot".into(),
+        position,
+        direction: Vec3A::new(1.2, -1.0, 0.0).normalize(),
+        intensity,
+        inner_angle: 0.4,
+        outer_angle: 0.6,
+        curve: SpotCurve::default(),
+        lamp,
+    };
+    for (what, light) in [("point lamp inside the ball", point), ("spot lamp inside the ball", spot)] {
+        assert_solved_is_what_bsdf_sampling_finds(ball_lit(true, 0.0, Some(light)), what, Some(10.0));
+    }
+    let sphere = LightDesc::Point {
+        name: "lamp".into(),
+        position,
+        intensity,
+        lamp: Some(LampShape { model: LampModel::Sphere, ..disk }),
+    };
+    assert!(!ball_lit(true, 0.0, Some(sphere)).caustics, "a sphere lamp is not connected through glass");
+}
+
+#[test]
+fn a_spot_light_inside_smooth_glass_is_connected_as_the_small_lamp_it_stands_for() {
+    // A point-like spot's caustic is the connection's alone (BSDF sampling cannot hit it):
+    // it must light the floor as a spot lamp of radius 1 cm does.
+    let spot = |lamp| LightDesc::Spot {
+        name: "spot".into(),
+        position: Vec3A::new(0.05, 0.85, 0.0),
+        direction: Vec3A::new(1.2, -1.0, 0.0).normalize(),
+        intensity: Rgb::new(3.0, 2.5, 2.0),
+        inner_angle: 0.4,
+        outer_angle: 0.6,
+        curve: SpotCurve::default(),
+        lamp,
+    };
+    let small = Some(LampShape { radius: 0.01, model: LampModel::FacingDisk, camera_visible: false });
+    let point_like = region_means(&mut ball_lit(true, 0.0, Some(spot(None))), true, 600);
+    let lamp = region_means(&mut ball_lit(true, 0.0, Some(spot(small))), true, 700);
+    let ((ours, ours_var), (theirs, theirs_var)) = (image_spread(&point_like), image_spread(&lamp));
+    let z = (ours - theirs) / (ours_var + theirs_var).sqrt();
+    eprintln!("spot: image mean {:.4} of the 1 cm lamp's (t {z:.1})", ours / theirs);
+    assert!(z.abs() < 5.84 && (ours / theirs - 1.0).abs() < 0.02, "image mean {} of the lamp's", ours / theirs);
 }
 
 /// A grey floor under a smooth glass ball (radius 0.5, centre 0.8 m up) in the sun from
@@ -178,7 +256,7 @@ fn info_and_the_summary_say_what_is_solved_for_through_glass() {
     let glass = blender("glass.glb");
     let glass = glass.to_str().unwrap();
     let out = myriad(&["info", glass], dir.path());
-    assert!(text(&out).contains("caustics     light from emissive surfaces, point and directional lights through smooth glass ('clear_glass', 'tinted_glass', 'globe_glass')"), "{}", text(&out));
+    assert!(text(&out).contains("caustics     light from emissive surfaces, lamps, point and directional lights through smooth glass ('clear_glass', 'tinted_glass', 'globe_glass')"), "{}", text(&out));
     let out = myriad(&["render", glass, "--spp", "2", "--resolution", "32x24"], dir.path());
     assert!(out.status.success(), "{}", text(&out));
     let line = text(&out).lines().find(|l| l.starts_with("caustics")).map(str::to_string).unwrap_or_default();

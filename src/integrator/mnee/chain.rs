@@ -91,24 +91,60 @@ impl Vertex {
 /// Unknowns of a chain: two per vertex.
 const N: usize = 2 * MAX_CASTERS;
 
-/// Where a chain's light is: a point (on an emissive surface, or a point light), or the
-/// direction towards a directional light.
+/// Where a chain's light is: a point (on an emissive surface or a sphere lamp, or a point
+/// light), a point on a disk lamp that turns to face whoever sees it, or the direction
+/// towards a directional light.
 #[derive(Clone, Copy, Debug)]
 pub(super) enum End {
-    /// A point light's or an emissive surface's point.
+    /// A point light's, an emissive surface's or a sphere lamp's point.
     Point(DVec3),
+    /// The point `offset` from `centre` on a disk across `towards` (unit), the disk turned
+    /// (by the least rotation) to face whoever sees it: Blender's soft-falloff lamp, whose
+    /// disk faces each receiver. Offsets measure its area.
+    Facing { centre: DVec3, towards: DVec3, offset: DVec3 },
     /// The unit direction towards a directional light.
     Direction(DVec3),
 }
 
 impl End {
-    /// The unit direction from `x` towards the light.
-    pub(super) fn seen_from(self, x: DVec3) -> DVec3 {
+    /// The light's point as seen from `x`; `None` for a directional light.
+    pub(super) fn point_from(self, x: DVec3) -> Option<DVec3> {
         match self {
-            End::Point(y) => (y - x).normalize_or_zero(),
-            End::Direction(d) => d,
+            End::Point(y) => Some(y),
+            End::Facing { centre, towards, offset } => {
+                Some(centre + turned(offset, towards, (x - centre).normalize_or_zero()))
+            }
+            End::Direction(_) => None,
         }
     }
+
+    /// The unit direction from `x` towards the light.
+    pub(super) fn seen_from(self, x: DVec3) -> DVec3 {
+        match (self, self.point_from(x)) {
+            (End::Direction(d), _) => d,
+            (_, y) => (y.unwrap_or(x) - x).normalize_or_zero(),
+        }
+    }
+
+    /// The light moved by `d` (a point, or a disk's offset); a direction stays.
+    fn moved(self, d: DVec3) -> End {
+        match self {
+            End::Point(y) => End::Point(y + d),
+            End::Facing { centre, towards, offset } => End::Facing { centre, towards, offset: offset + d },
+            End::Direction(_) => self,
+        }
+    }
+}
+
+/// `v` (across the unit `from`) turned by the least rotation that takes `from` to the unit
+/// `to` (Rodrigues' formula about from × to); undefined only for opposite directions.
+pub(super) fn turned(v: DVec3, from: DVec3, to: DVec3) -> DVec3 {
+    let axis = from.cross(to);
+    let cos = from.dot(to);
+    if cos <= -1.0 + 1e-12 {
+        return -v;
+    }
+    v + axis.cross(v) + axis.cross(axis.cross(v)) / (1.0 + cos)
 }
 
 /// A chain of refractions from the receiver `x0` to the light at `end`.
@@ -193,18 +229,15 @@ impl Chain {
     fn follow(&self, a: DVec3, b: DVec3, receiver: bool) -> Option<[[f64; 2]; N]> {
         let xs = self.positions();
         let base = self.residual(&xs);
-        let at = match (receiver, self.end) {
-            (true, _) => self.x0,
-            (false, End::Point(y)) => y,
-            (false, End::Direction(_)) => return None,
-        };
+        let last = xs[self.k - 1];
+        let at = if receiver { self.x0 } else { self.end.point_from(last)? };
         let h = Self::step(at);
         let mut minus = [[0.0; 2]; N];
         for (col, dir) in [a, b].into_iter().enumerate() {
             let c = if receiver {
                 self.residual_at(self.x0 + dir * h, &xs, self.end)
             } else {
-                self.residual_at(self.x0, &xs, End::Point(at + dir * h))
+                self.residual_at(self.x0, &xs, self.end.moved(dir * h))
             };
             for (r, row) in minus.iter_mut().enumerate().take(2 * self.k) {
                 row[col] = -(c[r] - base[r]) / h;
@@ -265,9 +298,9 @@ pub(super) fn to_f64(v: Vec3A) -> DVec3 {
 
 /// The ray from `origin` to the light at `end` and how far along it the light is.
 fn ray_to(origin: Vec3A, end: End) -> (Ray, f32) {
-    match end {
-        End::Point(y) => (Ray::new(origin, to_f32(y) - origin), 1.0),
-        End::Direction(d) => (Ray::new(origin, to_f32(d)), f32::INFINITY),
+    match end.point_from(to_f64(origin)) {
+        Some(y) => (Ray::new(origin, to_f32(y) - origin), 1.0),
+        None => (Ray::new(origin, to_f32(end.seen_from(to_f64(origin)))), f32::INFINITY),
     }
 }
 
@@ -414,10 +447,18 @@ pub(super) fn delta_density(chain: &Chain) -> Option<f64> {
             ((last.x - y) / r, 1.0 / (r * r))
         }
         End::Direction(w) => (w, 1.0),
+        End::Facing { .. } => return None,
     };
     let (e1, e2) = axis.any_orthonormal_pair();
     let det = (e1.dot(da) * e2.dot(db) - e1.dot(db) * e2.dot(da)) * scale;
     det.is_finite().then_some(det.abs())
+}
+
+/// The index of refraction around the chain's light: the glass's when it lies inside the
+/// glass, else 1.
+pub(super) fn ior_at_light(chain: &Chain) -> f64 {
+    let last = chain.vertex(chain.k - 1);
+    last.ior_towards(chain.end.seen_from(last.x))
 }
 
 /// What the glass along a chain passes on from the light point to the receiver (Fresnel and
@@ -434,11 +475,11 @@ pub(super) fn passage(chain: &Chain) -> (Rgb, f32) {
         through *= v.glass.transmittance(cos_o, eta);
         probability *= v.glass.refraction_probability(cos_o, eta);
         if wi.dot(v.n_geom) < 0.0 && v.glass.absorption != Rgb::ZERO {
-            let length = match (i + 1 == chain.k, chain.end) {
+            let length = match (i + 1 == chain.k, chain.end.point_from(v.x)) {
                 (false, _) => (xs[i + 1] - v.x).length(),
-                (true, End::Point(y)) => (y - v.x).length(),
+                (true, Some(y)) => (y - v.x).length(),
                 // A directional light seen from inside the glass: it is no way out.
-                (true, End::Direction(_)) => return (Rgb::ZERO, 0.0),
+                (true, None) => return (Rgb::ZERO, 0.0),
             };
             through *= transmittance(v.glass.absorption, length as f32);
         }
@@ -446,23 +487,12 @@ pub(super) fn passage(chain: &Chain) -> (Rgb, f32) {
     (through, probability)
 }
 
-/// The chain of refractions through smooth glass that takes light from the point `y` (front
-/// normal `n_y`) on an emissive surface to the receiver at `p` (geometric normal `n_p`),
-/// solved from the straight segment between them; `None` when that segment crosses
-/// anything but smooth glass, or more than `most` times, or the solve fails. A function of the two points alone: BSDF
-/// sampling asks it whether this estimator would have found a path it found.
-pub(super) fn connect(
-    scene: &Scene,
-    p: Vec3A,
-    n_p: Vec3A,
-    y: Vec3A,
-    n_y: Vec3A,
-    most: usize,
-    counters: &mut RayCounters,
-) -> Option<Chain> {
+/// Where a chain from the receiver at `p` to the point `y` (front normal `n_y`) on an
+/// emissive surface ends: just off the surface on `p`'s side. A function of the two points
+/// alone: BSDF sampling asks the connection whether it would have found a path it found.
+pub(super) fn surface_end(p: Vec3A, y: Vec3A, n_y: Vec3A) -> End {
     let toward = y - p;
-    let target = offset_ray_origin(y, if toward.dot(n_y) > 0.0 { -n_y } else { n_y });
-    connect_to(scene, p, n_p, End::Point(to_f64(target)), most, counters)
+    End::Point(to_f64(offset_ray_origin(y, if toward.dot(n_y) > 0.0 { -n_y } else { n_y })))
 }
 
 /// The chain of at most `most` refractions through smooth glass from the receiver at `p`
@@ -525,6 +555,19 @@ mod tests {
     }
 
     #[test]
+    fn turning_takes_one_direction_to_the_other_and_keeps_lengths_and_right_angles() {
+        let from = DVec3::new(0.3, -0.8, 0.5).normalize();
+        for to in [DVec3::new(-0.2, 0.1, 0.97).normalize(), from, DVec3::new(0.9, 0.4, -0.1).normalize()] {
+            let (a, b) = from.any_orthonormal_pair();
+            let (ta, tb) = (turned(a, from, to), turned(b, from, to));
+            assert!((ta.length() - 1.0).abs() < 1e-12 && (tb.length() - 1.0).abs() < 1e-12);
+            assert!(ta.dot(to).abs() < 1e-12 && tb.dot(to).abs() < 1e-12 && ta.dot(tb).abs() < 1e-12);
+            // A rotation, not a mirror: the frame keeps its handedness.
+            assert!((ta.cross(tb).dot(to) - a.cross(b).dot(from)).abs() < 1e-12);
+        }
+    }
+
+    #[test]
     fn chains_obey_snell_and_their_geometry_term_is_the_density_of_directions() {
         let scene = ball_scene();
         let mut counters = RayCounters::default();
@@ -537,8 +580,8 @@ mod tests {
             (Vec3A::new(0.4, 0.0, -0.2), Vec3A::new(0.02, 0.85, 0.01)),
         ];
         for (k, (p, y)) in cases.into_iter().enumerate() {
-            let chain =
-                connect(&scene, p, Vec3A::Y, y, n_y, MAX_CASTERS, &mut counters).expect("a chain through the ball");
+            let chain = connect_to(&scene, p, Vec3A::Y, surface_end(p, y, n_y), MAX_CASTERS, &mut counters)
+                .expect("a chain through the ball");
             assert_eq!(chain.k, if k < 2 { 2 } else { 1 }, "case {k}");
             assert_refracts(&chain);
             let g = geometry_term(&chain, to_f64(n_y)).unwrap();
@@ -546,7 +589,8 @@ mod tests {
             // x and z, and measure the solid angle the first direction sweeps.
             let h = 2e-3;
             let mut dir = |dy: Vec3A| {
-                let c = connect(&scene, p, Vec3A::Y, y + dy, n_y, MAX_CASTERS, &mut counters).expect("a moved chain");
+                let c = connect_to(&scene, p, Vec3A::Y, surface_end(p, y + dy, n_y), MAX_CASTERS, &mut counters)
+                    .expect("a moved chain");
                 c.first_direction()
             };
             let (dx, dz) = (dir(Vec3A::X * h) - dir(-Vec3A::X * h), dir(Vec3A::Z * h) - dir(-Vec3A::Z * h));
@@ -582,8 +626,8 @@ mod tests {
                 let c = connect_to(&scene, p + d, Vec3A::Y, end, MAX_CASTERS, &mut counters).expect("a moved chain");
                 let last = c.vertex(c.k - 1).x;
                 match end {
-                    End::Point(y) => (last - y).normalize(),
                     End::Direction(w) => last - w * last.dot(w),
+                    _ => (last - end.point_from(last).expect("a point")).normalize(),
                 }
             };
             let (dx, dz) = (swept(Vec3A::X * h) - swept(-Vec3A::X * h), swept(Vec3A::Z * h) - swept(-Vec3A::Z * h));

@@ -34,13 +34,16 @@
 
 mod chain;
 
+use glam::DVec3;
+
 use self::chain::{
-    Chain, End, connect, connect_to, delta_density, geometry_term, passage, ray_from_surface, to_f32, to_f64,
+    Chain, End, connect_to, delta_density, geometry_term, ior_at_light, passage, ray_from_surface, surface_end, to_f32,
+    to_f64, turned,
 };
 use super::RayCounters;
 use super::guided::Scattering;
 use crate::geometry::SurfaceHit;
-use crate::light::{AreaPoint, Light, LightId, LightSample};
+use crate::light::{AreaPoint, LampHit, LampModel, Light, LightId, LightSample, SphereLight};
 use crate::light_sampler::{LightStrategy, ShadingContext};
 use crate::math::{Rgb, Vec3A, power_heuristic};
 use crate::scene::Scene;
@@ -49,16 +52,16 @@ use crate::scene::Scene;
 pub const MAX_CASTERS: usize = 4;
 
 /// The power-heuristic weight of the connection along a solved `chain` against BSDF
-/// sampling, both as densities per unit area of the light: `light_pdf` (selection pmf ×
-/// point density) against `bsdf_pdf` (the receiver's density of the chain's first
-/// direction) × refracting at every vertex × G. Also G.
+/// sampling, both as densities per unit area of the light (across `n_y`): `light_pdf`
+/// (selection pmf × point density) against `bsdf_pdf` (the receiver's density of the
+/// chain's first direction) × refracting at every vertex × G. Also G.
 fn connection_weight(
     chain: &Chain,
-    n_y: Vec3A,
+    n_y: DVec3,
     light_pdf: f32,
     bsdf_pdf: impl FnOnce(Vec3A) -> f32,
 ) -> Option<(f32, f32)> {
-    let g = geometry_term(chain, to_f64(n_y))? as f32;
+    let g = geometry_term(chain, n_y)? as f32;
     let (_, probability) = passage(chain);
     let wi = to_f32(chain.first_direction());
     Some((power_heuristic(light_pdf, bsdf_pdf(wi) * probability * g), g))
@@ -78,18 +81,70 @@ pub fn through_glass(
     most: usize,
     counters: &mut RayCounters,
 ) -> Rgb {
+    let end = surface_end(p, point.p, point.n);
+    let radiance = |x: DVec3| point.emission.radiance_towards(point.n, to_f32(-end.seen_from(x)));
+    along_chain(scene, end, to_f64(point.n), pmf * point.pdf, radiance, scattering, p, most, counters)
+}
+
+/// Where a chain from the receiver at `p` ends on the facing-disk `lamp` for its point `q`
+/// on the disk facing whoever saw it (normal `n`): its offset from the centre, turned to the
+/// disk facing `p`; also that disk's normal and the point there (what `p`'s light sample
+/// would have chosen).
+fn lamp_end(lamp: &SphereLight, p: Vec3A, q: Vec3A, n: Vec3A) -> (End, DVec3, Vec3A) {
+    let centre = to_f64(lamp.center);
+    let towards = (to_f64(p) - centre).normalize();
+    let offset = turned(to_f64(q) - centre, to_f64(n), towards);
+    (End::Facing { centre, towards, offset }, towards, to_f32(centre + offset))
+}
+
+/// Light from a point or spot lamp seen as a facing disk, sampled at `sample` from `p`,
+/// reaching the surface `scattering` at `p` through smooth glass, as [`through_glass`] for
+/// surfaces; the disk turns to the chain's last refraction, as it faces whoever sees it.
+#[allow(clippy::too_many_arguments)]
+pub fn lamp_through_glass(
+    scene: &Scene,
+    lamp: &SphereLight,
+    sample: &LightSample,
+    pmf: f32,
+    scattering: &Scattering,
+    p: Vec3A,
+    most: usize,
+    counters: &mut RayCounters,
+) -> Rgb {
+    let (end, n_y, seen) = lamp_end(lamp, p, sample.p, sample.n);
+    let radiance = |x: DVec3| lamp.radiance_along(to_f32(x - end.point_from(x).unwrap_or(x)).normalize_or_zero());
+    along_chain(scene, end, n_y, pmf * lamp.disk_pdf_from(p, seen), radiance, scattering, p, most, counters)
+}
+
+/// What the light at `end` (its area measured across `n_y`, chosen with density
+/// `light_pdf` per unit area, pmf included) sending `radiance(x)` towards the chain's last
+/// refraction x brings to `scattering` at `p` through at most `most` refractions, divided
+/// by `light_pdf` and weighed against BSDF sampling.
+#[allow(clippy::too_many_arguments)]
+fn along_chain(
+    scene: &Scene,
+    end: End,
+    n_y: DVec3,
+    light_pdf: f32,
+    radiance: impl FnOnce(DVec3) -> Rgb,
+    scattering: &Scattering,
+    p: Vec3A,
+    most: usize,
+    counters: &mut RayCounters,
+) -> Rgb {
     counters.glass_tried += 1;
-    let Some(chain) = connect(scene, p, scattering.sp.n_geom, point.p, point.n, most, counters) else {
+    if !(light_pdf > 0.0) {
+        return Rgb::ZERO;
+    }
+    let Some(chain) = connect_to(scene, p, scattering.sp.n_geom, end, most, counters) else {
         return Rgb::ZERO;
     };
-    let last = chain.vertex(chain.k - 1);
     let f = scattering.sp.eval_cos(to_f32(chain.first_direction()));
-    let le = point.emission.radiance_towards(point.n, to_f32(-chain.end.seen_from(last.x)));
+    let le = radiance(chain.vertex(chain.k - 1).x);
     if f == Rgb::ZERO || le == Rgb::ZERO {
         return Rgb::ZERO;
     }
-    let light_pdf = pmf * point.pdf;
-    let Some((weight, g)) = connection_weight(&chain, point.n, light_pdf, |wi| scattering.pdf(wi)) else {
+    let Some((weight, g)) = connection_weight(&chain, n_y, light_pdf, |wi| scattering.pdf(wi)) else {
         return Rgb::ZERO;
     };
     if !light_reaches(scene, &chain, counters) {
@@ -105,13 +160,6 @@ fn light_reaches(scene: &Scene, chain: &Chain, counters: &mut RayCounters) -> bo
     let (ray, t_max) = ray_from_surface(to_f32(last.x), to_f32(last.n_geom), chain.end);
     counters.shadow_rays += 1;
     !scene.occluded(&ray, t_max)
-}
-
-/// Whether the connection through glass serves `light` as a delta light (point and
-/// directional lights; spots keep next-event estimation at the glass).
-#[inline]
-pub fn connects_delta(light: &Light) -> bool {
-    light.is_delta() && light.connects_through_glass()
 }
 
 /// What next-event estimation at a vertex has to do with smooth glass.
@@ -159,14 +207,17 @@ pub fn delta_through_glass(
     // What the light sends along the chain's last segment: irradiance across the beam of a
     // directional light, the intensity (radiance there × distance²) of a point or spot.
     let Some(seen) = light.sample_li(to_f32(last.x), u, &scene.images) else { return Rgb::ZERO };
-    let emitted = match chain.end {
-        End::Point(y) => seen.radiance * (last.x - y).length_squared() as f32,
-        End::Direction(_) => seen.radiance,
+    let emitted = match chain.end.point_from(last.x) {
+        Some(y) => seen.radiance * (last.x - y).length_squared() as f32,
+        None => seen.radiance,
     };
     if f == Rgb::ZERO || emitted == Rgb::ZERO {
         return Rgb::ZERO;
     }
-    let Some(density) = delta_density(&chain) else { return Rgb::ZERO };
+    // Radiance is not compressed by η² where it refracts (as in Cycles, and as BSDF sampling
+    // carries it here), so light leaving a point inside glass is η² brighter outside than the
+    // spreading of its directions alone gives: as bright as a small lamp there.
+    let Some(density) = delta_density(&chain).map(|d| d * ior_at_light(&chain).powi(2)) else { return Rgb::ZERO };
     if !light_reaches(scene, &chain, counters) {
         return Rgb::ZERO;
     }
@@ -249,15 +300,55 @@ impl GlassChain {
     ) -> Option<f32> {
         let from = self.from.filter(|_| self.k > 0)?;
         let area_pdf = scene.lights[id as usize].area_pdf()?;
-        // The path reached the light within its depth, so the connection had room for its chain.
-        let Some(chain) = connect(scene, from.ctx.p, from.n_geom, hit.p, hit.n_geom, MAX_CASTERS, counters) else {
-            return Some(1.0);
+        let end = surface_end(from.ctx.p, hit.p, hit.n_geom);
+        Some(self.weight_against(scene, strategy, id, end, to_f64(hit.n_geom), area_pdf, counters))
+    }
+
+    /// The same for the light of lamp `id` met at `hit` ([`lamp_through_glass`]).
+    pub fn lamp_weight(
+        &self,
+        scene: &Scene,
+        strategy: &LightStrategy,
+        hit: &LampHit,
+        id: u32,
+        counters: &mut RayCounters,
+    ) -> Option<f32> {
+        let from = self.from.filter(|_| self.k > 0)?;
+        let lamp = match &scene.lights[id as usize] {
+            Light::Sphere(lamp) if lamp.model == LampModel::FacingDisk => lamp,
+            _ => return None,
         };
-        if !self.is(&chain) {
+        let (end, n_y, seen) = lamp_end(lamp, from.ctx.p, hit.p, hit.n);
+        let density = lamp.disk_pdf_from(from.ctx.p, seen);
+        if !(density > 0.0) {
             return Some(1.0);
         }
+        Some(self.weight_against(scene, strategy, id, end, n_y, density, counters))
+    }
+
+    /// 1 − the connection's weight for the light `id` at `end` (its area across `n_y`, its
+    /// points chosen with `density` per unit area), when solving from the receiver finds
+    /// this very chain; else 1.
+    #[allow(clippy::too_many_arguments)]
+    fn weight_against(
+        &self,
+        scene: &Scene,
+        strategy: &LightStrategy,
+        id: u32,
+        end: End,
+        n_y: DVec3,
+        density: f32,
+        counters: &mut RayCounters,
+    ) -> f32 {
+        let Some(from) = self.from else { return 1.0 };
+        // The path reached the light within its depth, so the connection had room for its chain.
+        let Some(chain) = connect_to(scene, from.ctx.p, from.n_geom, end, MAX_CASTERS, counters) else {
+            return 1.0;
+        };
+        if !self.is(&chain) {
+            return 1.0;
+        }
         let pmf = strategy.selection_pmf(&from.ctx, LightId(id), from.every_light);
-        let weight = connection_weight(&chain, hit.n_geom, pmf * area_pdf, |_| from.pdf).map_or(0.0, |(w, _)| w);
-        Some(1.0 - weight)
+        1.0 - connection_weight(&chain, n_y, pmf * density, |_| from.pdf).map_or(0.0, |(w, _)| w)
     }
 }
