@@ -140,6 +140,12 @@ def build(name, folder):
         light("SPOT", (0.0, -1.2, 2.2), (math.radians(30), 0, 0), energy=300.0, shadow_soft_size=0.15,
               spot_size=math.radians(60), spot_blend=0.3)
         return "a spot of radius 0.15, size 60°, blend 0.3"
+    if name == "lamp_in_glass":
+        scene, grey = stage()
+        add_sphere((0, 0, 0.5), 0.5, principled("glass", Base_Color=(1.0, 1.0, 1.0), Roughness=0.0, IOR=1.45,
+                                                 Transmission_Weight=1.0), name="globe")
+        light("POINT", (0.05, -0.05, 0.55), energy=40.0, shadow_soft_size=0.1, color=(1.0, 0.85, 0.6))
+        return "a point light of radius 0.1 (soft falloff) inside a smooth glass ball"
     if name == "sun_angle":
         scene, grey = stage()
         grey_sphere(grey)
@@ -220,6 +226,7 @@ def build(name, folder):
 
 SCENES = [
     "area_square", "area_rectangle", "area_disk", "area_ellipse", "point_soft", "point_sphere", "spot_radius",
+    "lamp_in_glass",
     "sun_angle", "world_color", "world_hdri", "emissive_mesh", "principled", "sheen_anisotropic", "camera",
 ]  # fmt: skip
 
