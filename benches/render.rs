@@ -35,6 +35,7 @@ fn bench(c: &mut Criterion) {
                 max_depth: 8,
                 clamp: Clamp::OFF,
                 guiding: false,
+                caustics: true,
                 resolution,
                 aovs: Default::default(),
             };

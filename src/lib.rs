@@ -24,6 +24,7 @@
 //!     max_depth: 4,
 //!     clamp: myriad::settings::Clamp::OFF,
 //!     guiding: false,
+//!     caustics: true,
 //!     resolution: UVec2::new(16, 12),
 //!     aovs: Default::default(),
 //! };

@@ -220,6 +220,9 @@ struct SlurmArgs {
     /// Path guiding: on or off.
     #[arg(long, value_parser = parse_on_off)]
     guiding: Option<bool>,
+    /// Light through smooth glass solved for: on or off.
+    #[arg(long, value_parser = parse_on_off)]
+    caustics: Option<bool>,
     /// Output size, e.g. 640x480.
     #[arg(long, value_parser = parse_resolution)]
     resolution: Option<UVec2>,
@@ -264,6 +267,7 @@ impl SlurmArgs {
         flag("max-depth", self.max_depth.map(|d| d.to_string()));
         flag("clamp", self.clamp.map(|c| format!("{},{}", c.direct, c.indirect)));
         flag("guiding", self.guiding.map(|g| myriad::settings::on_off(g).to_string()));
+        flag("caustics", self.caustics.map(|c| myriad::settings::on_off(c).to_string()));
         flag("resolution", self.resolution.map(|r| format!("{}x{}", r.x, r.y)));
         flag("camera", self.camera.clone());
         flag("aov", (!self.aov.is_empty()).then(|| self.aov.join(",")));
@@ -364,6 +368,12 @@ struct CommonArgs {
     /// often) or off [default: the scene's, else off].
     #[arg(long, value_parser = parse_on_off)]
     guiding: Option<bool>,
+    /// Light through smooth glass (a lamp in a glass globe, the sun through a glass ball):
+    /// on (next-event estimation solves for the refractions, at some cost per sample where
+    /// it must) or off (left to BSDF sampling, which finds such light by luck and a point
+    /// light's or the sun's never) [default: the scene's, else on].
+    #[arg(long, value_parser = parse_on_off)]
+    caustics: Option<bool>,
     /// Camera to use, by name (default: the scene's first); `auto` frames the whole scene
     /// from the front (for OBJ files, which carry no camera).
     #[arg(long)]
@@ -391,6 +401,7 @@ impl CommonArgs {
             direct_only: self.direct_only,
             clamp: self.clamp,
             guiding: self.guiding,
+            caustics: self.caustics,
         }
     }
 }

@@ -67,6 +67,9 @@ pub struct RenderSettings {
     pub clamp: Clamp,
     /// Whether paths are guided by what earlier passes learned ([`crate::guiding`]).
     pub guiding: bool,
+    /// Whether light through smooth glass is solved for where the scene has any
+    /// ([`crate::integrator::mnee`]).
+    pub caustics: bool,
     /// Image size in pixels (the camera keeps its vertical field of view at any size).
     pub resolution: UVec2,
     /// Extra images to keep.
@@ -239,7 +242,9 @@ struct PassTally {
 fn render_pass(pass: &Pass, film: &mut Film, recording: &Seen, watch: Watch) -> PassTally {
     let called_off = || watch.cancel.is_some_and(|c| c.load(Ordering::Relaxed));
     let Pass { scene, strategy, guide, settings, first, count } = *pass;
-    let tracer = path::Tracer { scene, strategy, guide, max_depth: settings.max_depth, clamp: settings.clamp };
+    let caustics = scene.caustics && settings.caustics;
+    let tracer =
+        path::Tracer { scene, strategy, guide, max_depth: settings.max_depth, clamp: settings.clamp, caustics };
     let size = settings.resolution;
     let bands: Vec<_> = film.bands_mut(ROWS_PER_BAND).collect();
     // Each worker sums its bands' counts and records; every sum is of integers, so the

@@ -163,6 +163,9 @@ pub struct RenderDefaults {
     pub clamp: Option<Clamp>,
     /// Path guiding, `true` or `false`.
     pub guiding: Option<bool>,
+    /// Light through smooth glass solved for (manifold next-event estimation), `true` or
+    /// `false`.
+    pub caustics: Option<bool>,
 }
 
 #[cfg(test)]

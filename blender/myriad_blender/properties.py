@@ -57,6 +57,13 @@ class MyriadSettings(bpy.types.PropertyGroup):
         "glossy bounces); unbiased, but at equal time it does not pay on most scenes yet",
         default=False,
     )
+    caustics: bpy.props.BoolProperty(
+        name="Caustics Through Glass",
+        description="Light that reaches a surface only through smooth glass (a lamp in a glass globe, the sun "
+        "through a glass ball) is solved for, where Cycles needs Shadow Caustics flags; off: left to chance, "
+        "and a point light's or the sun's never found",
+        default=True,
+    )
     seed: bpy.props.IntProperty(
         name="Seed", description="Seed of every random number: the same seed gives the same image", default=0, min=0
     )

@@ -49,6 +49,7 @@ class MYRIAD_PT_render(bpy.types.Panel):
         col.prop(settings, "clamp_direct")
         col.prop(settings, "clamp_indirect")
         col.prop(settings, "guiding")
+        col.prop(settings, "caustics")
         col.prop(settings, "seed")
         layout.prop(settings, "binary")
 

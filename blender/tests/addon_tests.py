@@ -159,15 +159,17 @@ def main():
             target = os.path.join(out, "exported", f"{name}.ron")
             os.makedirs(os.path.dirname(target), exist_ok=True)
             summary["export_operator"] = sorted(bpy.ops.export_scene.myriad(filepath=target))
-            # Clamping and guiding set in the panel reach the scene file.
+            # Clamping, guiding and caustics set in the panel reach the scene file.
             scene.myriad.clamp_indirect = 10.0
             scene.myriad.guiding = True
+            scene.myriad.caustics = False
             clamped = os.path.join(out, "exported", f"{name}-clamped.ron")
             bpy.ops.export_scene.myriad(filepath=clamped)
             with open(clamped, encoding="utf-8") as f:
                 summary["clamped_render_block"] = next((line.strip() for line in f if "render:" in line), "")
             scene.myriad.clamp_indirect = 0.0
             scene.myriad.guiding = False
+            scene.myriad.caustics = True
     summary["bad_inputs"] = bad_inputs(blends[0], out)
     summary["stopped"] = stopped_render(keep, out)
     with open(os.path.join(out, "summary.json"), "w") as f:

@@ -125,9 +125,14 @@ impl fmt::Display for InfoReport {
         writeln!(
             f,
             "caustics     {}",
-            if s.caustics {
+            if s.caustics && r.render.caustics.unwrap_or(crate::commands::settings::DEFAULT_CAUSTICS) {
                 format!(
-                    "light from emissive surfaces, lamps, point and directional lights through smooth glass ({}) is solved for",
+                    "light from emissive surfaces, lamps, point and directional lights through smooth glass ({}) is solved for (--caustics)",
+                    smooth.join(", ")
+                )
+            } else if s.caustics {
+                format!(
+                    "off (the scene file's render.caustics): light through smooth glass ({}) is left to BSDF sampling",
                     smooth.join(", ")
                 )
             } else if smooth.is_empty() {

@@ -142,6 +142,7 @@ fn difference(a: &PartHeader, b: &PartHeader) -> String {
         ("max depth", a.max_depth.to_string(), b.max_depth.to_string()),
         ("clamp", a.clamp.to_string(), b.clamp.to_string()),
         ("guiding", on_off(a.guiding).into(), on_off(b.guiding).into()),
+        ("caustics", on_off(a.caustics).into(), on_off(b.caustics).into()),
         ("resolution", format!("{:?}", a.resolution), format!("{:?}", b.resolution)),
         ("AOVs", a.aovs.join(","), b.aovs.join(",")),
     ];
@@ -162,6 +163,7 @@ fn write_merged(opts: &MergeOptions, header: &PartHeader, film: &Film, png: Opti
         h.max_depth,
         h.clamp,
         h.guiding,
+        h.caustics,
     );
     meta.push(("myriad.samples".into(), format!("{}..{}", h.samples[0], h.samples[1])));
     meta.push(("myriad.parts_revision".into(), h.myriad.clone()));

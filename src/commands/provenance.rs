@@ -16,8 +16,9 @@ use crate::render::{RenderSettings, RenderStats};
 use crate::settings::{Clamp, LightSamplerKind};
 
 /// Header attributes recording how an image was made: this myriad's version and git
-/// revision, the scene, the sampler, the ray tracer, spp, seed, depth and, when they are on,
-/// the sample clamping (which biases the image) and path guiding.
+/// revision, the scene, the sampler, the ray tracer, spp, seed, depth and, when they are
+/// not the default, the sample clamping (which biases the image), path guiding and light
+/// through glass left unsolved.
 #[allow(clippy::too_many_arguments)]
 pub fn image_provenance(
     scene: &str,
@@ -28,9 +29,11 @@ pub fn image_provenance(
     max_depth: u32,
     clamp: Clamp,
     guiding: bool,
+    caustics: bool,
 ) -> Vec<(String, String)> {
     let clamped = clamp.is_on().then(|| ("myriad.clamp", clamp.to_string()));
     let guided = guiding.then(|| ("myriad.guiding", "on".to_string()));
+    let unsolved = (!caustics).then(|| ("myriad.caustics", "off".to_string()));
     [
         ("myriad.version", env!("CARGO_PKG_VERSION").to_string()),
         ("myriad.git_revision", env!("MYRIAD_GIT_REVISION").to_string()),
@@ -44,6 +47,7 @@ pub fn image_provenance(
     .into_iter()
     .chain(clamped)
     .chain(guided)
+    .chain(unsolved)
     .map(|(k, v)| (k.to_string(), v))
     .collect()
 }
@@ -58,7 +62,8 @@ pub fn provenance(
     stats: &RenderStats,
 ) -> Vec<(String, String)> {
     let s = settings;
-    let mut meta = image_provenance(scene, sampler.name(), tracer, stats.spp, s.seed, s.max_depth, s.clamp, s.guiding);
+    let (name, spp) = (sampler.name(), stats.spp);
+    let mut meta = image_provenance(scene, name, tracer, spp, s.seed, s.max_depth, s.clamp, s.guiding, s.caustics);
     meta.push(("myriad.render_seconds".into(), format!("{:.6}", stats.elapsed.as_secs_f64())));
     meta
 }
@@ -108,6 +113,7 @@ pub fn part_header(
         max_depth: settings.max_depth,
         clamp: settings.clamp,
         guiding: settings.guiding,
+        caustics: settings.caustics,
         resolution: settings.resolution.to_array(),
         aovs: settings.aovs.names(),
         samples: [samples.0, samples.1],

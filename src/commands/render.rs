@@ -307,13 +307,15 @@ impl fmt::Display for RenderReport {
             st.rays.shadow_rays
         )?;
         write_time_shares(f, &st.rays.time)?;
-        if s.caustics {
+        if s.caustics && self.settings.caustics {
             let (tried, solved) = (st.rays.glass_tried, st.rays.glass_solved);
             writeln!(
                 f,
                 "caustics   {tried} light samples behind smooth glass, {solved} reached through it ({:.0} %)",
                 100.0 * solved as f64 / tried.max(1) as f64
             )?;
+        } else if s.caustics {
+            writeln!(f, "caustics   off (--caustics): light through smooth glass left to BSDF sampling")?;
         }
         if self.sampler == LightSamplerKind::Cells && self.cells.is_none() && !s.lights.is_empty() {
             let lights = self.loaded.scene.lights.len();

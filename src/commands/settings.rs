@@ -23,6 +23,9 @@ pub const DEFAULT_MAX_DEPTH: u32 = 8;
 pub const DEFAULT_SAMPLER: LightSamplerKind = LightSamplerKind::Cells;
 /// Whether paths are guided when neither the command line nor the scene says.
 pub const DEFAULT_GUIDING: bool = false;
+/// Whether light through smooth glass is solved for when neither the command line nor the
+/// scene says.
+pub const DEFAULT_CAUSTICS: bool = true;
 
 /// Render settings as the command line gives them; `None` (and `false`) leave the choice to
 /// the scene file, then to the defaults.
@@ -46,6 +49,8 @@ pub struct RenderRequest {
     pub clamp: Option<Clamp>,
     /// Path guiding.
     pub guiding: Option<bool>,
+    /// Light through smooth glass solved for.
+    pub caustics: Option<bool>,
 }
 
 /// Settings decided: every choice made.
@@ -63,13 +68,15 @@ pub struct Resolved {
     pub clamp: Clamp,
     /// Path guiding.
     pub guiding: bool,
+    /// Light through smooth glass solved for.
+    pub caustics: bool,
 }
 
 impl Resolved {
     /// The settings of a render with these choices of an image of `resolution` keeping `aovs`.
     pub fn render_settings(&self, resolution: UVec2, aovs: AovSet) -> RenderSettings {
-        let Resolved { budget, seed, max_depth, clamp, guiding, .. } = *self;
-        RenderSettings { budget, seed, max_depth, clamp, guiding, resolution, aovs }
+        let Resolved { budget, seed, max_depth, clamp, guiding, caustics, .. } = *self;
+        RenderSettings { budget, seed, max_depth, clamp, guiding, caustics, resolution, aovs }
     }
 }
 
@@ -95,6 +102,7 @@ impl RenderRequest {
             sampler: self.sampler.or(scene.sampler).unwrap_or(DEFAULT_SAMPLER),
             clamp: self.clamp.or(scene.clamp).unwrap_or(Clamp::OFF),
             guiding: self.guiding.or(scene.guiding).unwrap_or(DEFAULT_GUIDING),
+            caustics: self.caustics.or(scene.caustics).unwrap_or(DEFAULT_CAUSTICS),
         })
     }
 }
@@ -112,6 +120,7 @@ mod tests {
             seed: Some(7),
             clamp: None,
             guiding: None,
+            caustics: Some(false),
         };
         let none = RenderRequest::default();
         let from_scene = none.resolve(&scene, DEFAULT_SPP).unwrap();
@@ -124,6 +133,7 @@ mod tests {
                 sampler: LightSamplerKind::Power,
                 clamp: Clamp::OFF,
                 guiding: DEFAULT_GUIDING,
+                caustics: false,
             }
         );
         let defaults = none.resolve(&RenderDefaults::default(), COMPARE_DEFAULT_SPP).unwrap();
@@ -136,6 +146,7 @@ mod tests {
                 sampler: DEFAULT_SAMPLER,
                 clamp: Clamp::OFF,
                 guiding: DEFAULT_GUIDING,
+                caustics: DEFAULT_CAUSTICS,
             }
         );
         let asked = RenderRequest {
@@ -155,6 +166,7 @@ mod tests {
                 sampler: LightSamplerKind::Uniform,
                 clamp: Clamp::OFF,
                 guiding: DEFAULT_GUIDING,
+                caustics: false,
             }
         );
         let timed = RenderRequest { time: Some(Duration::from_secs(3)), ..Default::default() };

@@ -136,6 +136,9 @@ pub struct CompareReport {
     /// Path guiding of the runs: `off`, or `on` with what it learned (the most any run held,
     /// its learning time).
     pub guiding: String,
+    /// Whether the runs solved for light through smooth glass, `on` or `off` (the reference
+    /// does).
+    pub caustics: String,
     /// Render threads.
     pub threads: usize,
     /// The reference.
@@ -259,13 +262,14 @@ impl CompareReport {
     pub fn markdown(&self, sheet: &str, plot: &str) -> String {
         let mut md = format!("# myriad compare: {}\n\n", self.scene);
         md += &format!(
-            "{}, {} × {} px, max depth {}, clamp {}, guiding {}, {} threads, {} seed(s). Reference: `{}` ({}{}).\n\n",
+            "{}, {} × {} px, max depth {}, clamp {}, guiding {}, caustics {}, {} threads, {} seed(s). Reference: `{}` ({}{}).\n\n",
             self.mode,
             self.resolution[0],
             self.resolution[1],
             self.max_depth,
             self.clamp,
             self.guiding,
+            self.caustics,
             self.threads,
             self.samplers.first().map_or(0, |s| s.runs.len()),
             self.reference.path,

@@ -225,12 +225,15 @@ pub struct Tracer<'a> {
     pub max_depth: u32,
     /// Clamping of contributions.
     pub clamp: Clamp,
+    /// Whether light through smooth glass is solved for (the scene has some to solve for
+    /// and the render asks for it).
+    pub caustics: bool,
 }
 
 impl Tracer<'_> {
     /// Radiance arriving along `ray` (a camera ray).
     pub fn radiance(&self, mut ray: Ray, stream: &SampleStream, tally: &mut Tally) -> PathSample {
-        let Tracer { scene, strategy, guide, max_depth, clamp } = *self;
+        let Tracer { scene, strategy, guide, max_depth, clamp, caustics } = *self;
         let mut l = Rgb::ZERO;
         let mut first_hit = None;
         let mut beta = Rgb::ONE;
@@ -271,7 +274,7 @@ impl Tracer<'_> {
                 break;
             }
             let material = &scene.materials[hit.material as usize];
-            let glass = if scene.caustics { material.smooth_glass() } else { None };
+            let glass = if caustics { material.smooth_glass() } else { None };
             // Glass on a chain from a receiver is crossed as the connection solves it: smooth.
             let as_smooth = glass.is_some() && chain.from_receiver();
             let entering = ray.dir.dot(hit.n_geom) < 0.0;
@@ -292,7 +295,7 @@ impl Tracer<'_> {
             let sp = ShadingPoint::new(bsdf, hit.n_geom, n_shading, tangent, wo);
             let scattering = Scattering::new(sp, hit.p, guide);
             // Where next-event estimation also looks through smooth glass: off it, outside it.
-            let receiver = scene.caustics && glass.is_none() && medium == Rgb::ZERO;
+            let receiver = caustics && glass.is_none() && medium == Rgb::ZERO;
 
             if !scene.lights.is_empty() {
                 // A light reached through k refractions ends a path k vertices deeper.

@@ -47,6 +47,10 @@ pub struct PartHeader {
     /// Path guiding (off in parts written before myriad had it).
     #[serde(default)]
     pub guiding: bool,
+    /// Light through smooth glass solved for (on in parts written before it could be
+    /// turned off).
+    #[serde(default = "on")]
+    pub caustics: bool,
     /// Image size.
     pub resolution: [u32; 2],
     /// AOV names kept (albedo, normal, depth, variance).
@@ -55,6 +59,11 @@ pub struct PartHeader {
     pub samples: [u32; 2],
     /// Wall time the part took to render.
     pub render_seconds: f64,
+}
+
+/// What a missing switch that is on by default reads as.
+fn on() -> bool {
+    true
 }
 
 impl PartHeader {

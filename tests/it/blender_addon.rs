@@ -106,7 +106,12 @@ fn f12_renders_what_cycles_renders_and_bad_input_is_reported() {
     }
     assert_eq!(summary["export_operator"], serde_json::json!(["FINISHED"]));
     let clamped = text(&summary["clamped_render_block"]);
-    assert!(clamped.contains("clamp: (direct: 0, indirect: 10)") && clamped.contains("guiding: true"), "{clamped}");
+    assert!(
+        clamped.contains("clamp: (direct: 0, indirect: 10)")
+            && clamped.contains("guiding: true")
+            && clamped.contains("caustics: false"),
+        "{clamped}"
+    );
 
     // Bad input: errors and warnings that name what is wrong, no traceback.
     let bad = &summary["bad_inputs"];

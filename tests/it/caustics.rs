@@ -275,3 +275,45 @@ fn info_and_the_summary_say_what_is_solved_for_through_glass() {
     let out = myriad(&["render", materials, "--spp", "1", "--resolution", "16x12"], dir.path());
     assert!(!text(&out).lines().any(|l| l.starts_with("caustics")), "{}", text(&out));
 }
+
+#[test]
+fn caustics_are_switched_anywhere_and_every_output_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::copy(blender("glass.glb"), d.join("glass.glb")).unwrap();
+    let render = |scene: &str, extra: &[&str], out: &str| {
+        crate::split::ok(&[&["render", scene, "--spp", "2", "--resolution", "32x24", "-o", out][..], extra].concat(), d)
+    };
+    let caustics_of = |name: &str| {
+        let (_, meta) = myriad::io::exr::read(&d.join(name)).unwrap();
+        meta.into_iter().find(|(k, _)| k == "myriad.caustics").map(|(_, v)| v)
+    };
+    let on = render("glass.glb", &["--caustics", "on"], "on.exr");
+    let off = render("glass.glb", &["--caustics", "off"], "off.exr");
+    assert!(on.contains("reached through it") && off.contains("caustics   off (--caustics)"), "{on}\n{off}");
+    assert_eq!((caustics_of("on.exr"), caustics_of("off.exr").as_deref()), (None, Some("off")));
+    // The scene file's switch gives the command line's image, and the command line wins.
+    let scene = |render: &str| {
+        format!(
+            "(\n    camera: Perspective(eye: (0, 2, 6), look_at: (0, 1, 0), yfov_deg: 40),\n    \
+             film: (resolution: (32, 24)),\n{render}    objects: [Mesh(path: \"glass.glb\")],\n)\n"
+        )
+    };
+    std::fs::write(d.join("solved.ron"), scene("")).unwrap();
+    std::fs::write(d.join("unsolved.ron"), scene("    render: (caustics: false),\n")).unwrap();
+    render("solved.ron", &["--caustics", "off"], "cli-off.exr");
+    render("unsolved.ron", &[], "file-off.exr");
+    crate::split::same_pixels(&d.join("cli-off.exr"), &d.join("file-off.exr"));
+    render("solved.ron", &[], "file-on.exr");
+    render("unsolved.ron", &["--caustics", "on"], "cli-on.exr");
+    crate::split::same_pixels(&d.join("cli-on.exr"), &d.join("file-on.exr"));
+    let info = crate::split::ok(&["info", "unsolved.ron"], d);
+    assert!(info.contains("caustics     off (the scene file's render.caustics)"), "{info}");
+    let out = myriad(&["render", "glass.glb", "--caustics", "maybe"], d);
+    assert!(!out.status.success() && text(&out).contains("on or off"), "{}", text(&out));
+    // compare solves in its runs as asked (its reference always does) and says so.
+    let args = ["compare", "glass.glb", "--samplers", "tree", "--spp", "2", "--reference-spp", "4"];
+    crate::split::ok(&[&args[..], &["--resolution", "16x12", "--caustics", "off", "--out-dir", "cmp"]].concat(), d);
+    let report = std::fs::read_to_string(d.join("cmp/report.md")).unwrap();
+    assert!(report.contains("caustics off"), "{report}");
+}

@@ -362,6 +362,7 @@ fn exercise(path: &Path) -> myriad::Result<()> {
             max_depth: 3,
             clamp: Clamp::OFF,
             guiding: false,
+            caustics: true,
             resolution,
             aovs: Default::default(),
         };

@@ -36,6 +36,7 @@ pub fn render_guided(
         max_depth,
         clamp: Clamp::OFF,
         guiding,
+        caustics: true,
         resolution,
         aovs: Default::default(),
     };
@@ -335,6 +336,7 @@ fn pass_boundaries_do_not_change_pixels() {
         max_depth: 4,
         clamp: Clamp::OFF,
         guiding: false,
+        caustics: true,
         resolution,
         aovs: Default::default(),
     };
@@ -368,6 +370,7 @@ fn a_progressive_render_in_passes_of_its_own_is_the_render_and_a_called_off_pass
         max_depth: 3,
         clamp: Clamp::OFF,
         guiding: false,
+        caustics: true,
         resolution,
         aovs: Default::default(),
     };
@@ -402,6 +405,7 @@ fn the_image_size_is_a_render_setting_not_part_of_the_scene() {
         max_depth: 4,
         clamp: Clamp::OFF,
         guiding: false,
+        caustics: true,
         resolution,
         aovs: Default::default(),
     };

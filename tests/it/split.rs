@@ -90,9 +90,11 @@ fn parts_that_do_not_belong_together_are_refused_by_name() {
     render("5..6", &[], "late.part");
     render("2..4", &["--clamp", "3"], "clamp.part");
     render("2..4", &["--guiding", "on"], "guided.part");
+    render("2..4", &["--caustics", "off"], "unsolved.part");
     fails(&["merge", "a.part", "seed.part", "-o", "x.exr"], d, &["seed.part", "does not belong", "seed 9"]);
     fails(&["merge", "a.part", "clamp.part", "-o", "x.exr"], d, &["clamp.part", "does not belong", "clamp 0,3"]);
     fails(&["merge", "a.part", "guided.part", "-o", "x.exr"], d, &["guided.part", "does not belong", "guiding on"]);
+    fails(&["merge", "a.part", "unsolved.part", "-o", "x.exr"], d, &["unsolved.part", "caustics off"]);
     fails(&["merge", "a.part", "overlap.part", "-o", "x.exr"], d, &["overlap.part", "1..3", "overlap"]);
     fails(&["merge", "a.part", "b.part", "late.part", "-o", "x.exr"], d, &["4..5", "--allow-gaps"]);
     std::fs::write(d.join("cut.part"), &std::fs::read(d.join("a.part")).unwrap()[..200]).unwrap();

@@ -71,6 +71,7 @@ def export_scene(depsgraph, folder, settings):
             seed=str(settings.seed),
             clamp=_clamp(settings),
             guiding="true" if settings.guiding else None,
+            caustics=None if settings.caustics else "false",
         ),
         objects=objects,
         lights=light_list,

@@ -104,6 +104,7 @@ pub fn compare(opts: &CompareOptions) -> Result<CompareReport> {
         max_depth: plan.max_depth,
         clamp: plan.clamp.to_string(),
         guiding,
+        caustics: crate::settings::on_off(plan.caustics).to_string(),
         threads: rayon::current_num_threads(),
         reference: reference.info,
         samplers: results,

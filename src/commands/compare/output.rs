@@ -34,6 +34,7 @@ pub(crate) fn html_page(
         ("max depth", report.max_depth.to_string()),
         ("clamp", report.clamp.clone()),
         ("guiding", report.guiding.clone()),
+        ("caustics", report.caustics.clone()),
         ("threads", report.threads.to_string()),
         ("seeds", seeds.join(", ")),
         ("reference", format!("{} ({})", report.reference.path, report.reference.origin)),

@@ -91,6 +91,8 @@ pub(crate) struct Plan {
     pub(crate) clamp: Clamp,
     /// Whether the runs are guided.
     pub(crate) guiding: bool,
+    /// Whether the runs solve for light through smooth glass (the reference always does).
+    pub(crate) caustics: bool,
     pub(crate) resolution: UVec2,
     pub(crate) seeds: Vec<u64>,
     /// The ray tracer the scene was built for, for the provenance.
@@ -100,7 +102,7 @@ pub(crate) struct Plan {
 impl Plan {
     /// The command line's choices over the scene's, over the defaults.
     pub(crate) fn new(opts: &CompareOptions, report: &SceneReport) -> Result<Self> {
-        let Resolved { budget, seed, max_depth, clamp, guiding, .. } =
+        let Resolved { budget, seed, max_depth, clamp, guiding, caustics, .. } =
             opts.settings.resolve(&report.render, COMPARE_DEFAULT_SPP)?;
         let samplers = opts.samplers.clone().unwrap_or_else(|| {
             let mut samplers = DEFAULT_SAMPLERS.to_vec();
@@ -114,12 +116,13 @@ impl Plan {
         crate::limits::check_runs(samplers.len() as u64 * opts.seeds as u64, what).map_err(Error::Usage)?;
         let seeds = (1..=opts.seeds as u64).map(|k| seed.wrapping_add(k)).collect();
         let tracer = report.stats.tracer;
-        Ok(Self { samplers, budget, max_depth, clamp, guiding, resolution: report.resolution, seeds, tracer })
+        let resolution = report.resolution;
+        Ok(Self { samplers, budget, max_depth, clamp, guiding, caustics, resolution, seeds, tracer })
     }
 
     pub(crate) fn settings(&self, seed: u64) -> RenderSettings {
-        let Plan { budget, max_depth, clamp, guiding, resolution, .. } = *self;
-        RenderSettings { budget, seed, max_depth, clamp, guiding, resolution, aovs: AovSet::default() }
+        let Plan { budget, max_depth, clamp, guiding, caustics, resolution, .. } = *self;
+        RenderSettings { budget, seed, max_depth, clamp, guiding, caustics, resolution, aovs: AovSet::default() }
     }
 
     /// The bias flag's level for one sampler: [`BIAS_ALPHA`] over all of them (Šidák).

@@ -152,6 +152,7 @@ pub(crate) fn reference(
         max_depth,
         clamp: Clamp::OFF,
         guiding: false,
+        caustics: true,
         resolution: size,
         aovs,
     };

@@ -119,6 +119,7 @@ pub(crate) fn load_run(dir: &Path, plan: &Plan, scene_hash: &str, kind: LightSam
         ("max depth", h.max_depth.to_string(), plan.max_depth.to_string()),
         ("clamp", h.clamp.to_string(), plan.clamp.to_string()),
         ("guiding", on_off(h.guiding).into(), on_off(plan.guiding).into()),
+        ("caustics", on_off(h.caustics).into(), on_off(plan.caustics).into()),
         ("resolution", format!("{:?}", h.resolution), format!("{:?}", plan.resolution.to_array())),
         ("scene contents", h.scene_hash.clone(), scene_hash.to_string()),
     ];
