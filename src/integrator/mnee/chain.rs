@@ -91,12 +91,12 @@ impl Vertex {
 /// Unknowns of a chain: two per vertex.
 const N: usize = 2 * MAX_CASTERS;
 
-/// Where a chain's light is: a point (on an emissive surface or a sphere lamp, or a point
-/// light), a point on a disk lamp that turns to face whoever sees it, or the direction
-/// towards a directional light.
+/// Where a chain's light is: a point (on an emissive surface, or a point or spot light), a
+/// point on a disk lamp that turns to face whoever sees it, or the direction towards a
+/// directional light.
 #[derive(Clone, Copy, Debug)]
 pub(super) enum End {
-    /// A point light's, an emissive surface's or a sphere lamp's point.
+    /// An emissive surface's point, or a point or spot light's.
     Point(DVec3),
     /// The point `offset` from `centre` on a disk across `towards` (unit), the disk turned
     /// (by the least rotation) to face whoever sees it: Blender's soft-falloff lamp, whose

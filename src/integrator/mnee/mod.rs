@@ -43,7 +43,7 @@ use self::chain::{
 use super::RayCounters;
 use super::guided::Scattering;
 use crate::geometry::SurfaceHit;
-use crate::light::{AreaPoint, LampHit, LampModel, Light, LightId, LightSample, SphereLight};
+use crate::light::{AreaPoint, LampHit, Light, LightId, LightSample, SphereLight};
 use crate::light_sampler::{LightStrategy, ShadingContext};
 use crate::math::{Rgb, Vec3A, power_heuristic};
 use crate::scene::Scene;
@@ -314,10 +314,11 @@ impl GlassChain {
         counters: &mut RayCounters,
     ) -> Option<f32> {
         let from = self.from.filter(|_| self.k > 0)?;
-        let lamp = match &scene.lights[id as usize] {
-            Light::Sphere(lamp) if lamp.model == LampModel::FacingDisk => lamp,
-            _ => return None,
-        };
+        let light = &scene.lights[id as usize];
+        let Light::Sphere(lamp) = light else { return None };
+        if !light.connects_through_glass() {
+            return None;
+        }
         let (end, n_y, seen) = lamp_end(lamp, from.ctx.p, hit.p, hit.n);
         let density = lamp.disk_pdf_from(from.ctx.p, seen);
         if !(density > 0.0) {
