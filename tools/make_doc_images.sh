@@ -7,6 +7,8 @@
 #   docs/images/compare-page.png  that comparison's report.html in headless Chromium
 #   docs/images/glass-guiding-{off,on}.png  tests/data/blender/glass.glb, 320×240, 64 spp,
 #                                 seed 2, without and with path guiding
+#   docs/images/glass-caustics-{off,on}.png the same without and with light through
+#                                 smooth glass solved for (--caustics)
 # Needs Chromium for compare-page.png (Debian: apt-get install chromium). Takes about two
 # minutes.
 set -euo pipefail
@@ -26,6 +28,11 @@ for guiding in off on; do
     "$myriad" render tests/data/blender/glass.glb --resolution 320x240 --spp 64 --max-depth 9 --seed 2 \
         --guiding "$guiding" -q -o "$work/glass-$guiding.exr" --png "docs/images/glass-guiding-$guiding.png"
 done
+for caustics in off on; do
+    "$myriad" render tests/data/blender/glass.glb --resolution 320x240 --spp 64 --max-depth 9 --seed 2 \
+        --caustics "$caustics" -q -o "$work/glass-caustics-$caustics.exr" \
+        --png "docs/images/glass-caustics-$caustics.png"
+done
 
 chromium=$(command -v chromium || command -v chromium-browser || command -v google-chrome || true)
 if [ -z "$chromium" ]; then
@@ -37,4 +44,4 @@ fi
     --disable-background-networking --user-data-dir="$work/profile" --window-size=1200,900 \
     --force-device-scale-factor=1 --virtual-time-budget=15000 \
     --screenshot="$PWD/docs/images/compare-page.png" "file://$work/compare/report.html" 2>/dev/null
-echo "wrote docs/images/render.png, samplers.png, glass-guiding-off.png, glass-guiding-on.png, compare-page.png"
+echo "wrote docs/images/render.png, samplers.png, glass-guiding-{off,on}.png, glass-caustics-{off,on}.png, compare-page.png"
