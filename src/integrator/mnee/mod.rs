@@ -89,12 +89,12 @@ pub fn through_glass(
 /// Where a chain from the receiver at `p` ends on the facing-disk `lamp` for its point `q`
 /// on the disk facing whoever saw it (normal `n`): its offset from the centre, turned to the
 /// disk facing `p`; also that disk's normal and the point there (what `p`'s light sample
-/// would have chosen).
-fn lamp_end(lamp: &SphereLight, p: Vec3A, q: Vec3A, n: Vec3A) -> (End, DVec3, Vec3A) {
+/// would have chosen); `None` for a receiver at the lamp's centre.
+fn lamp_end(lamp: &SphereLight, p: Vec3A, q: Vec3A, n: Vec3A) -> Option<(End, DVec3, Vec3A)> {
     let centre = to_f64(lamp.center);
-    let towards = (to_f64(p) - centre).normalize();
+    let towards = (to_f64(p) - centre).try_normalize()?;
     let offset = turned(to_f64(q) - centre, to_f64(n), towards);
-    (End::Facing { centre, towards, offset }, towards, to_f32(centre + offset))
+    Some((End::Facing { centre, towards, offset }, towards, to_f32(centre + offset)))
 }
 
 /// Light from a point or spot lamp seen as a facing disk, sampled at `sample` from `p`,
@@ -111,7 +111,7 @@ pub fn lamp_through_glass(
     most: usize,
     counters: &mut RayCounters,
 ) -> Rgb {
-    let (end, n_y, seen) = lamp_end(lamp, p, sample.p, sample.n);
+    let Some((end, n_y, seen)) = lamp_end(lamp, p, sample.p, sample.n) else { return Rgb::ZERO };
     let radiance = |x: DVec3| lamp.radiance_along(to_f32(x - end.point_from(x).unwrap_or(x)).normalize_or_zero());
     along_chain(scene, end, n_y, pmf * lamp.disk_pdf_from(p, seen), radiance, scattering, p, most, counters)
 }
@@ -319,7 +319,7 @@ impl GlassChain {
         if !light.connects_through_glass() {
             return None;
         }
-        let (end, n_y, seen) = lamp_end(lamp, from.ctx.p, hit.p, hit.n);
+        let Some((end, n_y, seen)) = lamp_end(lamp, from.ctx.p, hit.p, hit.n) else { return Some(1.0) };
         let density = lamp.disk_pdf_from(from.ctx.p, seen);
         if !(density > 0.0) {
             return Some(1.0);
