@@ -353,3 +353,35 @@ impl GlassChain {
         1.0 - connection_weight(&chain, n_y, pmf * density, |_| from.pdf).map_or(0.0, |(w, _)| w)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::light::LampModel;
+
+    #[test]
+    fn a_point_met_on_a_facing_disk_maps_back_to_the_one_the_receiver_would_have_sampled() {
+        // The connection samples an offset on the disk facing the receiver; a path that met
+        // the disk facing its last refraction must find that same offset for the weights
+        // of the two to add up.
+        let lamp = SphereLight::new(Vec3A::new(0.1, 0.9, -0.2), 0.15, Rgb::ONE, LampModel::FacingDisk, None);
+        let receiver = Vec3A::new(1.3, 0.0, 0.4);
+        let last = Vec3A::new(0.35, 0.55, 0.1);
+        for offset in [Vec3A::new(0.05, 0.0, 0.0), Vec3A::new(-0.02, 0.03, 0.09), Vec3A::ZERO] {
+            // The offset on the receiver's disk (across the direction to the receiver)...
+            let towards = (receiver - lamp.center).normalize();
+            let offset = offset - towards * offset.dot(towards);
+            let sampled = lamp.center + offset;
+            let (end, n, seen) = lamp_end(&lamp, receiver, sampled, towards).unwrap();
+            assert!((seen - sampled).length() < 1e-6 && (n - to_f64(towards)).length() < 1e-6);
+            // ...is where the disk facing the last refraction shows it, and back again.
+            let met = to_f32(end.point_from(to_f64(last)).unwrap());
+            let facing = (last - lamp.center).normalize();
+            assert!((met - lamp.center).dot(facing).abs() < 1e-6, "on the disk facing the last refraction");
+            assert!(((met - lamp.center).length() - offset.length()).abs() < 1e-6);
+            let (_, _, back) = lamp_end(&lamp, receiver, met, facing).unwrap();
+            assert!((back - sampled).length() < 1e-5, "{back} against {sampled}");
+        }
+        assert!(lamp_end(&lamp, lamp.center, lamp.center, Vec3A::Y).is_none());
+    }
+}
