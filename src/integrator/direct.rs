@@ -51,36 +51,45 @@ fn light_contribution(
     if (f == Rgb::ZERO || !(ls.pdf > 0.0)) && !behind_glass {
         return Rgb::ZERO;
     }
-    let origin = sp.ray_origin(p, ls.wi);
-    counters.shadow_rays += 1;
-    counters.time.shadow_rays += counters.timing as u64;
-    let occluded = timed(counters.timing, &mut counters.time.shadow, || {
-        if ls.distance.is_infinite() {
-            scene.occluded(&Ray::new(origin, ls.wi), f32::INFINITY)
-        } else {
-            let target = if ls.n == Vec3A::ZERO { ls.p } else { offset_ray_origin(ls.p, ls.n) };
-            scene.occluded(&Ray::new(origin, target - origin), 1.0)
-        }
-    });
-    // Only a light on this side of the surface is reached through the volume the point is in;
-    // towards the far side the ray leaves it at once.
-    let inside = medium != Rgb::ZERO && ls.wi.dot(sp.n_geom) > 0.0;
-    let through = if inside { super::transmittance(medium, ls.distance) } else { Rgb::ONE };
-    if occluded && behind_glass {
+    // Where smooth glass may stand in the way, the connection's walk along it is the shadow
+    // ray (and seeds the chain through the glass), else a shadow ray.
+    let occluded = if behind_glass {
         let most = glass.refractions;
-        let c = match light {
+        let behind = match light {
             Light::Sphere(lamp) => mnee::lamp_through_glass(scene, lamp, &ls, pmf, scattering, p, most, counters),
             _ if light.is_delta() => {
                 mnee::delta_through_glass(scene, light, &ls, u, pmf, scattering, p, most, counters)
             }
             _ => match light.area_point(u, &scene.images) {
                 Some(point) => mnee::through_glass(scene, &point, pmf, scattering, p, most, counters),
-                None => Rgb::ZERO,
+                None => mnee::Behind::Blocked,
             },
         };
-        observe(luminance(c), c != Rgb::ZERO);
-        return c;
-    }
+        match behind {
+            mnee::Behind::Through(c) => {
+                observe(luminance(c), c != Rgb::ZERO);
+                return c;
+            }
+            mnee::Behind::Blocked => true,
+            mnee::Behind::Clear => false,
+        }
+    } else {
+        let origin = sp.ray_origin(p, ls.wi);
+        counters.shadow_rays += 1;
+        counters.time.shadow_rays += counters.timing as u64;
+        timed(counters.timing, &mut counters.time.shadow, || {
+            if ls.distance.is_infinite() {
+                scene.occluded(&Ray::new(origin, ls.wi), f32::INFINITY)
+            } else {
+                let target = if ls.n == Vec3A::ZERO { ls.p } else { offset_ray_origin(ls.p, ls.n) };
+                scene.occluded(&Ray::new(origin, target - origin), 1.0)
+            }
+        })
+    };
+    // Only a light on this side of the surface is reached through the volume the point is in;
+    // towards the far side the ray leaves it at once.
+    let inside = medium != Rgb::ZERO && ls.wi.dot(sp.n_geom) > 0.0;
+    let through = if inside { super::transmittance(medium, ls.distance) } else { Rgb::ONE };
     if f == Rgb::ZERO || !(ls.pdf > 0.0) {
         return Rgb::ZERO;
     }

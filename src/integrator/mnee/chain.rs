@@ -316,24 +316,33 @@ fn glass_at(scene: &Scene, hit: &SurfaceHit) -> Option<SmoothGlass> {
     scene.materials[hit.material as usize].smooth_glass()
 }
 
+/// What the straight way from a receiver to a light meets.
+pub(super) enum Straight {
+    /// Nothing: the light is in plain sight.
+    Clear,
+    /// Something other than smooth glass, or more smooth glass than a chain may cross.
+    Blocked,
+    /// Smooth glass alone: the chain solved from its refractions, `None` where Newton's method
+    /// found none.
+    Glass(Option<Chain>),
+}
+
 /// The refractions the straight way from the receiver at `p` (its ray `origin`) to the light
-/// at `end` makes, or `None` when anything but smooth glass is in the way, or more than
-/// `most` refractions.
-fn seed(scene: &Scene, p: Vec3A, origin: Vec3A, end: End, most: usize, counters: &mut RayCounters) -> Option<Chain> {
+/// at `end` makes, at most `most` of them.
+fn seed(scene: &Scene, p: Vec3A, origin: Vec3A, end: End, most: usize, counters: &mut RayCounters) -> Straight {
     let mut chain = Chain { x0: to_f64(p), end, v: [None; MAX_CASTERS], k: 0 };
     let (mut ray, t_max) = ray_to(origin, end);
     for _ in 0..MAX_SEED_HITS {
         counters.rays += 1;
-        let Some(hit) = scene.intersect(&ray, t_max) else { return (chain.k > 0).then_some(chain) };
-        let glass = glass_at(scene, &hit)?;
-        if chain.k == most {
-            return None;
-        }
+        let Some(hit) = scene.intersect(&ray, t_max) else {
+            return if chain.k > 0 { Straight::Glass(Some(chain)) } else { Straight::Clear };
+        };
+        let Some(glass) = glass_at(scene, &hit).filter(|_| chain.k < most) else { return Straight::Blocked };
         chain.v[chain.k] = Some(Vertex::at(scene, &hit, glass));
         chain.k += 1;
         ray = ray_from_surface(hit.p, hit.n_geom, end).0;
     }
-    None
+    Straight::Blocked
 }
 
 /// The chain with vertex `i` onwards moved to where rays towards `proposed` meet the same
@@ -495,6 +504,20 @@ pub(super) fn surface_end(p: Vec3A, y: Vec3A, n_y: Vec3A) -> End {
     End::Point(to_f64(offset_ray_origin(y, if toward.dot(n_y) > 0.0 { -n_y } else { n_y })))
 }
 
+/// What the straight way from the receiver at `p` (geometric normal `n_p`) to the light at
+/// `end` meets; where that is smooth glass alone, at most `most` refractions of it, the chain
+/// solved from them.
+pub(super) fn walk(scene: &Scene, p: Vec3A, n_p: Vec3A, end: End, most: usize, counters: &mut RayCounters) -> Straight {
+    let towards = to_f32(end.seen_from(to_f64(p)));
+    let origin = offset_ray_origin(p, if towards.dot(n_p) >= 0.0 { n_p } else { -n_p });
+    match seed(scene, p, origin, end, most, counters) {
+        Straight::Glass(Some(chain)) => {
+            Straight::Glass(solve_chain(scene, chain, origin, counters).filter(refracts_everywhere))
+        }
+        other => other,
+    }
+}
+
 /// The chain of at most `most` refractions through smooth glass from the receiver at `p`
 /// (geometric normal `n_p`) to the light at `end`, seeded by the straight way and solved.
 pub(super) fn connect_to(
@@ -505,10 +528,10 @@ pub(super) fn connect_to(
     most: usize,
     counters: &mut RayCounters,
 ) -> Option<Chain> {
-    let towards = to_f32(end.seen_from(to_f64(p)));
-    let origin = offset_ray_origin(p, if towards.dot(n_p) >= 0.0 { n_p } else { -n_p });
-    let chain = seed(scene, p, origin, end, most, counters)?;
-    solve_chain(scene, chain, origin, counters).filter(refracts_everywhere)
+    match walk(scene, p, n_p, end, most, counters) {
+        Straight::Glass(chain) => chain,
+        _ => None,
+    }
 }
 
 #[cfg(test)]

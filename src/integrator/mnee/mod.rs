@@ -37,8 +37,8 @@ mod chain;
 use glam::DVec3;
 
 use self::chain::{
-    Chain, End, connect_to, delta_density, geometry_term, ior_at_light, passage, ray_from_surface, surface_end, to_f32,
-    to_f64, turned,
+    Chain, End, Straight, connect_to, delta_density, geometry_term, ior_at_light, passage, ray_from_surface,
+    surface_end, to_f32, to_f64, turned, walk,
 };
 use super::RayCounters;
 use super::guided::Scattering;
@@ -67,11 +67,46 @@ fn connection_weight(
     Some((power_heuristic(light_pdf, bsdf_pdf(wi) * probability * g), g))
 }
 
-/// Light from an emissive surface, sampled at `point`, reaching the surface `scattering` at
-/// `p` through smooth glass, divided by the point's density and the light's selection
-/// probability `pmf` and weighed against BSDF sampling; zero when no chain of at most `most`
-/// refractions connects them (a path through more would end before it reached the light:
-/// its depth counts each one) or it is blocked.
+/// What next-event estimation finds along the straight way of a light sample where smooth
+/// glass may stand in it (one walk serves as its shadow ray and seeds the chain).
+pub enum Behind {
+    /// The light in plain sight.
+    Clear,
+    /// Something other than smooth glass in the way (or more than a chain may cross).
+    Blocked,
+    /// Smooth glass alone in the way: the light that comes through it (zero where no chain
+    /// was solved or its last segment is blocked).
+    Through(Rgb),
+}
+
+/// Walks the straight way from the receiver at `p` (geometric normal `n_p`) to the light at
+/// `end`; through smooth glass alone, `lit` says what the solved chain brings.
+fn behind(
+    scene: &Scene,
+    p: Vec3A,
+    n_p: Vec3A,
+    end: End,
+    most: usize,
+    counters: &mut RayCounters,
+    lit: impl FnOnce(&Chain, &mut RayCounters) -> Rgb,
+) -> Behind {
+    match walk(scene, p, n_p, end, most, counters) {
+        Straight::Clear => Behind::Clear,
+        Straight::Blocked => Behind::Blocked,
+        Straight::Glass(chain) => {
+            counters.glass_tried += 1;
+            let c = chain.map_or(Rgb::ZERO, |chain| lit(&chain, counters));
+            counters.glass_solved += (c != Rgb::ZERO) as u64;
+            Behind::Through(c)
+        }
+    }
+}
+
+/// The straight way to an emissive surface's point `point`, sampled from the surface
+/// `scattering` at `p`; through smooth glass, the light that reaches `p` along the chain of
+/// at most `most` refractions (a path through more would end before it reached the light:
+/// its depth counts each one), divided by the point's density and the light's selection
+/// probability `pmf` and weighed against BSDF sampling.
 pub fn through_glass(
     scene: &Scene,
     point: &AreaPoint,
@@ -80,10 +115,13 @@ pub fn through_glass(
     p: Vec3A,
     most: usize,
     counters: &mut RayCounters,
-) -> Rgb {
+) -> Behind {
     let end = surface_end(p, point.p, point.n);
     let radiance = |x: DVec3| point.emission.radiance_towards(point.n, to_f32(-end.seen_from(x)));
-    along_chain(scene, end, to_f64(point.n), pmf * point.pdf, radiance, scattering, p, most, counters)
+    let light_pdf = pmf * point.pdf;
+    behind(scene, p, scattering.sp.n_geom, end, most, counters, |chain, counters| {
+        weighed(scene, chain, to_f64(point.n), light_pdf, radiance, scattering, counters)
+    })
 }
 
 /// Where a chain from the receiver at `p` ends on the facing-disk `lamp` for its point `q`
@@ -97,9 +135,9 @@ fn lamp_end(lamp: &SphereLight, p: Vec3A, q: Vec3A, n: Vec3A) -> Option<(End, DV
     Some((End::Facing { centre, towards, offset }, towards, to_f32(centre + offset)))
 }
 
-/// Light from a point or spot lamp seen as a facing disk, sampled at `sample` from `p`,
-/// reaching the surface `scattering` at `p` through smooth glass, as [`through_glass`] for
-/// surfaces; the disk turns to the chain's last refraction, as it faces whoever sees it.
+/// The straight way to a point or spot lamp seen as a facing disk, sampled at `sample`
+/// from `p`, as [`through_glass`] for surfaces; the disk turns to the chain's last
+/// refraction, as it faces whoever sees it.
 #[allow(clippy::too_many_arguments)]
 pub fn lamp_through_glass(
     scene: &Scene,
@@ -110,48 +148,43 @@ pub fn lamp_through_glass(
     p: Vec3A,
     most: usize,
     counters: &mut RayCounters,
-) -> Rgb {
-    let Some((end, n_y, seen)) = lamp_end(lamp, p, sample.p, sample.n) else { return Rgb::ZERO };
+) -> Behind {
+    let Some((end, n_y, seen)) = lamp_end(lamp, p, sample.p, sample.n) else { return Behind::Blocked };
     let radiance = |x: DVec3| lamp.radiance_along(to_f32(x - end.point_from(x).unwrap_or(x)).normalize_or_zero());
-    along_chain(scene, end, n_y, pmf * lamp.disk_pdf_from(p, seen), radiance, scattering, p, most, counters)
+    let light_pdf = pmf * lamp.disk_pdf_from(p, seen);
+    behind(scene, p, scattering.sp.n_geom, end, most, counters, |chain, counters| {
+        weighed(scene, chain, n_y, light_pdf, radiance, scattering, counters)
+    })
 }
 
-/// What the light at `end` (its area measured across `n_y`, chosen with density
-/// `light_pdf` per unit area, pmf included) sending `radiance(x)` towards the chain's last
-/// refraction x brings to `scattering` at `p` through at most `most` refractions, divided
-/// by `light_pdf` and weighed against BSDF sampling.
-#[allow(clippy::too_many_arguments)]
-fn along_chain(
+/// What the light at the end of the solved `chain` (its area measured across `n_y`, chosen
+/// with density `light_pdf` per unit area, pmf included), sending `radiance(x)` towards the
+/// chain's last refraction x, brings to `scattering` at its receiver, divided by
+/// `light_pdf` and weighed against BSDF sampling.
+fn weighed(
     scene: &Scene,
-    end: End,
+    chain: &Chain,
     n_y: DVec3,
     light_pdf: f32,
     radiance: impl FnOnce(DVec3) -> Rgb,
     scattering: &Scattering,
-    p: Vec3A,
-    most: usize,
     counters: &mut RayCounters,
 ) -> Rgb {
-    counters.glass_tried += 1;
     if !(light_pdf > 0.0) {
         return Rgb::ZERO;
     }
-    let Some(chain) = connect_to(scene, p, scattering.sp.n_geom, end, most, counters) else {
-        return Rgb::ZERO;
-    };
     let f = scattering.sp.eval_cos(to_f32(chain.first_direction()));
     let le = radiance(chain.vertex(chain.k - 1).x);
     if f == Rgb::ZERO || le == Rgb::ZERO {
         return Rgb::ZERO;
     }
-    let Some((weight, g)) = connection_weight(&chain, n_y, light_pdf, |wi| scattering.pdf(wi)) else {
+    let Some((weight, g)) = connection_weight(chain, n_y, light_pdf, |wi| scattering.pdf(wi)) else {
         return Rgb::ZERO;
     };
-    if !light_reaches(scene, &chain, counters) {
+    if !light_reaches(scene, chain, counters) {
         return Rgb::ZERO;
     }
-    counters.glass_solved += 1;
-    f * passage(&chain).0 * le * (g * weight / light_pdf)
+    f * passage(chain).0 * le * (g * weight / light_pdf)
 }
 
 /// Whether nothing blocks the chain's last segment, from its last refraction to the light.
@@ -181,10 +214,10 @@ fn delta_end(sample: &LightSample) -> End {
     if sample.distance.is_infinite() { End::Direction(to_f64(sample.wi)) } else { End::Point(to_f64(sample.p)) }
 }
 
-/// Light from the delta light `light` (its sample from `p`: `sample`) reaching the surface
-/// `scattering` at `p` through at most `most` refractions of smooth glass, divided by the
-/// light's selection probability `pmf`; zero when no chain connects them or it is blocked.
-/// BSDF sampling cannot find such light, so it takes it all; next-event estimation at the
+/// The straight way to the delta light `light` (its sample from `p`: `sample`); through
+/// smooth glass, the light that reaches the surface `scattering` at `p` along the chain of
+/// at most `most` refractions, divided by the light's selection probability `pmf`. BSDF
+/// sampling cannot find such light, so the chain takes it all; next-event estimation at the
 /// glass takes none ([`AtVertex::smooth`]).
 #[allow(clippy::too_many_arguments)]
 pub fn delta_through_glass(
@@ -197,11 +230,24 @@ pub fn delta_through_glass(
     p: Vec3A,
     most: usize,
     counters: &mut RayCounters,
+) -> Behind {
+    behind(scene, p, scattering.sp.n_geom, delta_end(sample), most, counters, |chain, counters| {
+        delta_along(scene, light, chain, u, pmf, scattering, counters)
+    })
+}
+
+/// What the delta light `light` sends along the solved `chain` to the surface `scattering`
+/// at its receiver, divided by the light's selection probability `pmf`; zero where the
+/// chain's last segment is blocked.
+fn delta_along(
+    scene: &Scene,
+    light: &Light,
+    chain: &Chain,
+    u: [u64; 2],
+    pmf: f32,
+    scattering: &Scattering,
+    counters: &mut RayCounters,
 ) -> Rgb {
-    counters.glass_tried += 1;
-    let Some(chain) = connect_to(scene, p, scattering.sp.n_geom, delta_end(sample), most, counters) else {
-        return Rgb::ZERO;
-    };
     let last = chain.vertex(chain.k - 1);
     let f = scattering.sp.eval_cos(to_f32(chain.first_direction()));
     // What the light sends along the chain's last segment: irradiance across the beam of a
@@ -217,12 +263,11 @@ pub fn delta_through_glass(
     // Radiance is not compressed by η² where it refracts (as in Cycles, and as BSDF sampling
     // carries it here), so light leaving a point inside glass is η² brighter outside than the
     // spreading of its directions alone gives: as bright as a small lamp there.
-    let Some(density) = delta_density(&chain).map(|d| d * ior_at_light(&chain).powi(2)) else { return Rgb::ZERO };
-    if !light_reaches(scene, &chain, counters) {
+    let Some(density) = delta_density(chain).map(|d| d * ior_at_light(chain).powi(2)) else { return Rgb::ZERO };
+    if !light_reaches(scene, chain, counters) {
         return Rgb::ZERO;
     }
-    counters.glass_solved += 1;
-    f * passage(&chain).0 * emitted * (density as f32 / pmf)
+    f * passage(chain).0 * emitted * (density as f32 / pmf)
 }
 
 /// A surface a path left where next-event estimation looks through glass.
