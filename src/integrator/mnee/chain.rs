@@ -316,7 +316,9 @@ fn glass_at(scene: &Scene, hit: &SurfaceHit) -> Option<SmoothGlass> {
     scene.materials[hit.material as usize].smooth_glass()
 }
 
-/// What the straight way from a receiver to a light meets.
+/// What the straight way from a receiver to a light meets. (Returned once per light sample
+/// and never stored: boxing the chain would allocate on every connection.)
+#[allow(clippy::large_enum_variant)]
 pub(super) enum Straight {
     /// Nothing: the light is in plain sight.
     Clear,
