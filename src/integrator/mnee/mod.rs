@@ -1,8 +1,9 @@
 //! Manifold next-event estimation: light reaching a surface through smooth glass.
 //!
-//! A light sample on an emissive surface that only smooth solid glass
+//! A light sample on an emissive surface (or on a lamp's disk) that only smooth solid glass
 //! ([`Material::smooth_glass`](crate::material::Material::smooth_glass)) blocks is not given
-//! up. The refractions the straight segment makes through the glass seed a chain of vertices
+//! up: the walk along its straight way, which is its shadow ray too ([`Behind`]), finds the
+//! glass, and the refractions the straight segment makes through the glass seed a chain of vertices
 //! that Newton's method walks over the glass until each one obeys Snell's law (Hanika, Droske
 //! and Fascione 2015, *Manifold next event estimation*; Cycles' shadow caustics). The light
 //! then arrives along the chain with the generalised geometry term G: the density of the
@@ -14,7 +15,7 @@
 //! for them; [`AtVertex::smooth`]), where no sample of a delta light can meet them.
 //!
 //! BSDF sampling finds the same paths (a receiver, 1 to [`MAX_CASTERS`] refractions through
-//! smooth glass, an emissive surface), and each strategy is good where the other is poor:
+//! smooth glass, an emissive surface or a lamp), and each strategy is good where the other is poor:
 //! where the glass focuses light (a caustic's bright core) G is large and varies fast over
 //! the light, and BSDF sampling hits the light easily; where it spreads light thin, only
 //! the solved connection finds it. So the two are weighed by the power heuristic, both
@@ -26,8 +27,8 @@
 //! does not solve, a second solution of the same seed — keeps
 //! only its BSDF-sampled share.
 //!
-//! Against Cycles: it serves emissive triangles and quads (Cycles only lamps; glTF scenes
-//! bring their light in meshes) and weighs by MIS where Cycles leaves every such path to
+//! Against Cycles: it serves emissive triangles and quads as well as lamps (Cycles only
+//! lamps; glTF scenes bring their light in meshes) and weighs by MIS where Cycles leaves every such path to
 //! the connection and clamps G at 2; casters and receivers follow from the materials rather
 //! than object flags; the constraints' derivatives are forward differences in f64 (analytic
 //! in Cycles). `chain.rs` solves the chains; this file weighs and adds up what they bring.
