@@ -1,18 +1,21 @@
 #!/usr/bin/env python3
-"""Does path guiding pay? Guided against unguided renders at equal samples, over seeds.
+"""Does a switch pay? Renders with a switch off and on at equal samples, over seeds.
 
-    python3 tools/guiding_bench.py [--spp 64] [--seeds 3] [--resolution 320x240]
-        [--threads 1] [--myriad target/release/myriad] [--other-myriad B] [SCENE[=REFERENCE] ...]
+    python3 tools/switch_bench.py [--switch guiding|caustics] [--spp 64] [--seeds 3]
+        [--resolution 320x240] [--threads 1] [--myriad target/release/myriad] [--other-myriad B]
+        [SCENE[=REFERENCE] ...]
 
-For each scene (default: glass.glb, materials.glb, lobby.glb against their Cycles references in
-tests/data/blender/refs/, and scenes/street.ron against a 4096-spp unguided myriad render made
-once and kept in target/guiding-bench/), renders `--seeds` seeds with `--guiding off` and
-`--guiding on` (max depth 9, as Cycles' 8 bounces), and prints per mode the mean full relMSE
-over the seeds (fireflies included: they are the point), each seed's relMSE, the CPU seconds
-(user + system of the renders, one thread by default so that CPU is what is measured) and the
-efficiency 1 / (mean relMSE · mean CPU s); the last column is guided ÷ unguided efficiency.
-`--other-myriad B` renders the unguided runs with another binary (this issue's start, say).
-Only the Python standard library is used.
+`--switch guiding` (the default) is path guiding, `--switch caustics` the connections through
+smooth glass. For each scene (default: glass.glb, materials.glb, lobby.glb against their
+Cycles references in tests/data/blender/refs/, and scenes/street.ron against a 4096-spp myriad
+render with the switch at its default, made once and kept in target/switch-bench/), renders
+`--seeds` seeds with `--SWITCH off` and `--SWITCH on` (max depth 9, as Cycles' 8 bounces),
+and prints per mode the mean full relMSE over the seeds (fireflies included: they are the
+point), each seed's relMSE, the CPU seconds (user + system of the renders, one thread by
+default so that CPU is what is measured) and the efficiency 1 / (mean relMSE · mean CPU s);
+the last column is on ÷ off efficiency. `--other-myriad B` renders the `off` runs with another
+binary, without the switch (this issue's start, say). Only the Python standard library is
+used.
 """
 
 import argparse
@@ -45,13 +48,14 @@ def rel_mse(myriad, image, reference):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("scenes", nargs="*")
+    ap.add_argument("--switch", choices=["guiding", "caustics"], default="guiding")
     ap.add_argument("--spp", type=int, default=64)
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--resolution", default="320x240")
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--myriad", default=str(ROOT / "target/release/myriad"))
-    ap.add_argument("--other-myriad", help="binary for the unguided runs")
-    ap.add_argument("--out", default=str(ROOT / "target/guiding-bench"))
+    ap.add_argument("--other-myriad", help="binary for the runs with the switch off")
+    ap.add_argument("--out", default=str(ROOT / "target/switch-bench"))
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -67,17 +71,17 @@ def main():
             reference = out / f"{name}.reference.exr"
             if not reference.exists():
                 print(f"{name}: rendering a 4096-spp reference …", file=sys.stderr)
-                subprocess.run([args.myriad, "render", scene, "--spp", "4096", "--seed", "999", "--guiding", "off",
+                subprocess.run([args.myriad, "render", scene, "--spp", "4096", "--seed", "999",
                                 "--resolution", args.resolution, "--max-depth", "9", "-q", "-o", str(reference)],
                                check=True, stdout=subprocess.DEVNULL)
         efficiency = {}
         for mode in ["off", "on"]:
             binary = args.other_myriad if mode == "off" and args.other_myriad else args.myriad
-            guiding = [] if binary != args.myriad else ["--guiding", mode]
+            switch = [] if binary != args.myriad else [f"--{args.switch}", mode]
             rels, cpu = [], 0.0
             for seed in range(1, args.seeds + 1):
-                image = out / f"{name}.{mode}.{seed}.exr"
-                cpu += cpu_of([binary, "render", scene, "--spp", str(args.spp), "--seed", str(seed), *guiding,
+                image = out / f"{name}.{args.switch}-{mode}.{seed}.exr"
+                cpu += cpu_of([binary, "render", scene, "--spp", str(args.spp), "--seed", str(seed), *switch,
                                *common, "-o", str(image)])
                 rels.append(rel_mse(args.myriad, image, reference))
             mean, cpu = sum(rels) / len(rels), cpu / args.seeds
