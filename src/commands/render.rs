@@ -244,15 +244,18 @@ fn paths(ps: &[PathBuf]) -> String {
     ps.iter().map(|p: &PathBuf| Path::display(p).to_string()).collect::<Vec<_>>().join(", ")
 }
 
-/// Where the timed paths spent their time, and the tracer's speed per thread by kind of ray.
-fn write_time_shares(f: &mut fmt::Formatter<'_>, time: &PhaseTimes) -> fmt::Result {
-    let Some([trace, choice, rest]) = time.shares() else { return Ok(()) };
+/// Where the timed paths spent their time (with `caustics`, also in connections through
+/// glass), and the tracer's speed per thread by kind of ray.
+fn write_time_shares(f: &mut fmt::Formatter<'_>, time: &PhaseTimes, caustics: bool) -> fmt::Result {
+    let Some([trace, choice, glass, rest]) = time.shares() else { return Ok(()) };
     let (closest, shadow) = time.rays_per_second();
     let rate = |r: Option<f64>| r.map_or("-".into(), |r| format!("{}rays/s", human_rate(r)));
+    let connections =
+        if caustics { format!("connections through glass {:.0} %, ", 100.0 * glass) } else { String::new() };
     writeln!(
         f,
         "time       tracing {:.0} % (camera+bounce {}, shadow {} per thread), light choice {:.0} %, \
-         shading and the rest {:.0} % (on 1 in {TIMED_ONE_IN} paths)",
+         {connections}shading and the rest {:.0} % (on 1 in {TIMED_ONE_IN} paths)",
         100.0 * trace,
         rate(closest),
         rate(shadow),
@@ -306,7 +309,7 @@ impl fmt::Display for RenderReport {
             st.rays.rays,
             st.rays.shadow_rays
         )?;
-        write_time_shares(f, &st.rays.time)?;
+        write_time_shares(f, &st.rays.time, s.caustics && self.settings.caustics)?;
         if s.caustics && self.settings.caustics {
             let (tried, solved) = (st.rays.glass_tried, st.rays.glass_solved);
             writeln!(

@@ -11,7 +11,7 @@
 
 use super::guided::Scattering;
 use super::mnee;
-use super::timing::timed;
+use super::timing::{Stopwatch, timed};
 use super::{RayCounters, Tally};
 use crate::geometry::{Ray, offset_ray_origin};
 use crate::light::Light;
@@ -55,6 +55,7 @@ fn light_contribution(
     // ray (and seeds the chain through the glass), else a shadow ray.
     let occluded = if behind_glass {
         let most = glass.refractions;
+        let watch = Stopwatch::start(counters.timing);
         let behind = match light {
             Light::Sphere(lamp) => mnee::lamp_through_glass(scene, lamp, &ls, pmf, scattering, p, most, counters),
             _ if light.is_delta() => {
@@ -65,6 +66,7 @@ fn light_contribution(
                 None => mnee::Behind::Blocked,
             },
         };
+        watch.stop(&mut counters.time.glass);
         match behind {
             mnee::Behind::Through(c) => {
                 observe(luminance(c), c != Rgb::ZERO);

@@ -10,7 +10,7 @@
 use super::direct::estimate_direct;
 use super::guided::Scattering;
 use super::mnee::{AtVertex, GlassChain, MAX_CASTERS};
-use super::timing::timed;
+use super::timing::{Stopwatch, timed};
 use super::transmittance;
 use super::{RayCounters, Tally};
 use crate::geometry::{Ray, SurfaceHit};
@@ -120,7 +120,10 @@ fn lamps_seen(
             return;
         }
         let through = if medium != Rgb::ZERO { transmittance(medium, hit.t * ray.dir.length()) } else { Rgb::ONE };
-        let weight = match chain.lamp_weight(scene, strategy, hit, id, counters) {
+        let watch = Stopwatch::start(counters.timing);
+        let through_glass = chain.lamp_weight(scene, strategy, hit, id, counters);
+        watch.stop(&mut counters.time.glass);
+        let weight = match through_glass {
             Some(w) => w,
             None => bsdf_hit_weight(strategy, id, prev, |ctx| light.pdf_li(ctx.p, hit.p, hit.n), counters),
         };
@@ -173,7 +176,10 @@ fn emitted(
     if le == Rgb::ZERO {
         return le;
     }
-    let weight = match chain.weight(scene, strategy, hit, id, counters) {
+    let watch = Stopwatch::start(counters.timing);
+    let through_glass = chain.weight(scene, strategy, hit, id, counters);
+    watch.stop(&mut counters.time.glass);
+    let weight = match through_glass {
         Some(w) => w,
         None => bsdf_hit_weight(strategy, id, prev, |ctx| light.pdf_li(ctx.p, hit.p, hit.n_geom), counters),
     };

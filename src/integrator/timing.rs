@@ -1,4 +1,5 @@
-//! Where a render's time goes: tracing, choosing lights, and shading with the rest, measured
+//! Where a render's time goes: tracing, choosing lights, connecting through glass, and
+//! shading with the rest, measured
 //! on one path in [`TIMED_ONE_IN`] so that the others pay one untaken branch per phase.
 //!
 //! Owns: [`PhaseTimes`] (CPU ticks per phase and the rays traced inside the timed paths) and
@@ -57,6 +58,9 @@ pub struct PhaseTimes {
     pub shadow: u64,
     /// Choosing a light and evaluating the probability of one chosen (for MIS).
     pub choice: u64,
+    /// Connections through smooth glass: the walks along light samples' straight ways, the
+    /// solves, and the re-solves that weigh light BSDF sampling brought through glass.
+    pub glass: u64,
     /// Closest-hit rays of the timed paths.
     pub closest_rays: u64,
     /// Shadow rays of the timed paths.
@@ -70,18 +74,20 @@ impl PhaseTimes {
         self.closest += other.closest;
         self.shadow += other.shadow;
         self.choice += other.choice;
+        self.glass += other.glass;
         self.closest_rays += other.closest_rays;
         self.shadow_rays += other.shadow_rays;
     }
 
-    /// Shares of the timed paths' time (tracing, light choice, shading and the rest), or
-    /// `None` when no path was timed.
-    pub fn shares(&self) -> Option<[f64; 3]> {
+    /// Shares of the timed paths' time (tracing, light choice, connections through glass,
+    /// shading and the rest), or `None` when no path was timed.
+    pub fn shares(&self) -> Option<[f64; 4]> {
         (self.total > 0).then(|| {
             let total = self.total as f64;
             let trace = (self.closest + self.shadow) as f64 / total;
             let choice = self.choice as f64 / total;
-            [trace, choice, (1.0 - trace - choice).max(0.0)]
+            let glass = self.glass as f64 / total;
+            [trace, choice, glass, (1.0 - trace - choice - glass).max(0.0)]
         })
     }
 
@@ -89,6 +95,27 @@ impl PhaseTimes {
     pub fn rays_per_second(&self) -> (Option<f64>, Option<f64>) {
         let rate = |rays: u64, t: u64| (t > 0).then(|| rays as f64 * ticks_per_second() / t as f64);
         (rate(self.closest_rays, self.closest), rate(self.shadow_rays, self.shadow))
+    }
+}
+
+/// When a phase began, on a timed path: for phases whose work needs what [`timed`]'s slot
+/// borrows.
+#[derive(Clone, Copy, Debug)]
+pub struct Stopwatch(Option<u64>);
+
+impl Stopwatch {
+    /// Starts when `on`.
+    #[inline(always)]
+    pub fn start(on: bool) -> Self {
+        Self(on.then(ticks))
+    }
+
+    /// Adds the ticks since the start to `slot`.
+    #[inline(always)]
+    pub fn stop(self, slot: &mut u64) {
+        if let Some(start) = self.0 {
+            *slot += ticks().wrapping_sub(start);
+        }
     }
 }
 
@@ -119,9 +146,11 @@ mod tests {
 
     #[test]
     fn shares_add_up_to_one() {
-        let t = PhaseTimes { total: 100, closest: 20, shadow: 10, choice: 30, closest_rays: 4, shadow_rays: 2 };
-        let [a, b, c] = t.shares().unwrap();
-        assert!((a - 0.3).abs() < 1e-12 && (b - 0.3).abs() < 1e-12 && (a + b + c - 1.0).abs() < 1e-12);
+        let t =
+            PhaseTimes { total: 100, closest: 20, shadow: 10, choice: 30, glass: 15, closest_rays: 4, shadow_rays: 2 };
+        let [a, b, g, c] = t.shares().unwrap();
+        assert!((a - 0.3).abs() < 1e-12 && (b - 0.3).abs() < 1e-12 && (g - 0.15).abs() < 1e-12);
+        assert!((a + b + g + c - 1.0).abs() < 1e-12);
         assert!(PhaseTimes::default().shares().is_none());
     }
 }

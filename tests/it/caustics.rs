@@ -259,6 +259,8 @@ fn info_and_the_summary_say_what_is_solved_for_through_glass() {
     assert!(text(&out).contains("caustics     light from emissive surfaces, lamps, point and directional lights through smooth glass ('clear_glass', 'tinted_glass', 'globe_glass')"), "{}", text(&out));
     let out = myriad(&["render", glass, "--spp", "2", "--resolution", "32x24"], dir.path());
     assert!(out.status.success(), "{}", text(&out));
+    let time = text(&out).lines().find(|l| l.starts_with("time")).map(str::to_string).unwrap_or_default();
+    assert!(time.contains("connections through glass"), "{time}");
     let line = text(&out).lines().find(|l| l.starts_with("caustics")).map(str::to_string).unwrap_or_default();
     let numbers: Vec<u64> = line.split_whitespace().filter_map(|w| w.parse().ok()).collect();
     assert!(
@@ -274,6 +276,7 @@ fn info_and_the_summary_say_what_is_solved_for_through_glass() {
     assert!(text(&myriad(&["info", materials], dir.path())).contains("caustics     no smooth solid glass"));
     let out = myriad(&["render", materials, "--spp", "1", "--resolution", "16x12"], dir.path());
     assert!(!text(&out).lines().any(|l| l.starts_with("caustics")), "{}", text(&out));
+    assert!(!text(&out).contains("connections through glass"), "{}", text(&out));
 }
 
 #[test]
