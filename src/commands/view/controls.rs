@@ -14,7 +14,8 @@ const ORBIT_PER_PIXEL: f32 = 0.01;
 const DOLLY_PER_NOTCH: f32 = 0.1;
 
 /// The keys, as the status bar lists them.
-pub const KEYS: [&str; 7] = ["1-7 sampler", "G guiding", "+/- exposure", "E error", "S save", "R reset", "Esc quit"];
+pub const KEYS: [&str; 8] =
+    ["1-7 sampler", "G guiding", "C caustics", "+/- exposure", "E error", "S save", "R reset", "Esc quit"];
 
 /// What a key asks for.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,6 +24,8 @@ pub enum Action {
     Sampler(LightSamplerKind),
     /// Turn path guiding on or off (restarts the accumulation).
     ToggleGuiding,
+    /// Turn the connections through smooth glass on or off (restarts the accumulation).
+    ToggleCaustics,
     /// Change the exposure by this many stops (display only).
     Exposure(f32),
     /// Show the false-colour relative error against the reference, or the render again.
@@ -46,6 +49,7 @@ pub fn action(key: Key) -> Option<Action> {
         Key::Minus | Key::NumPadMinus => Action::Exposure(-EXPOSURE_STEP),
         Key::E => Action::ToggleError,
         Key::G => Action::ToggleGuiding,
+        Key::C => Action::ToggleCaustics,
         Key::S => Action::Save,
         Key::R => Action::ResetCamera,
         Key::Escape | Key::Q => Action::Quit,
@@ -114,6 +118,7 @@ mod tests {
         assert_eq!(action(Key::Key7), Some(Action::Sampler(LightSamplerKind::Cells)));
         assert_eq!(action(Key::Minus), Some(Action::Exposure(-EXPOSURE_STEP)));
         assert_eq!(action(Key::G), Some(Action::ToggleGuiding));
+        assert_eq!(action(Key::C), Some(Action::ToggleCaustics));
         assert_eq!(action(Key::Escape), Some(Action::Quit));
         assert_eq!(action(Key::Z), None);
     }

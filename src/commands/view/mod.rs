@@ -212,6 +212,8 @@ struct Ui<'a> {
     sampler: LightSamplerKind,
     /// Whether paths are guided.
     guiding: bool,
+    /// Whether light through smooth glass is solved for.
+    caustics: bool,
     camera: Camera,
     navigation: Navigation,
     reference: Option<(PathBuf, Vec<Rgb>)>,
@@ -249,6 +251,7 @@ impl<'a> Ui<'a> {
             show_error: false,
             sampler: resolved.sampler,
             guiding: resolved.guiding,
+            caustics: resolved.caustics,
             camera: navigation.home,
             navigation,
             reference,
@@ -320,6 +323,10 @@ impl<'a> Ui<'a> {
                 self.guiding = !self.guiding;
                 self.restart(orders);
             }
+            Action::ToggleCaustics => {
+                self.caustics = !self.caustics;
+                self.restart(orders);
+            }
             Action::Exposure(stops) => self.exposure += stops,
             Action::ToggleError if self.reference.is_some() => self.show_error = !self.show_error,
             Action::ToggleError => self.message = "no reference to show the error against: pass --reference".into(),
@@ -371,6 +378,7 @@ impl<'a> Ui<'a> {
             generation: self.generation,
             sampler: self.sampler,
             guiding: self.guiding,
+            caustics: self.caustics,
             camera: self.camera,
         }));
     }

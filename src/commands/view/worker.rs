@@ -37,15 +37,24 @@ pub struct View {
     pub sampler: LightSamplerKind,
     /// Whether paths are guided.
     pub guiding: bool,
+    /// Whether light through smooth glass is solved for.
+    pub caustics: bool,
     /// Where the camera is.
     pub camera: Camera,
 }
 
 impl View {
-    /// What the status bar calls it: what chose the lights, and guiding when it is on.
+    /// What the status bar calls it: what chose the lights, guiding when it is on, and the
+    /// connections through glass when they are off.
     fn label(&self, strategy: &LightStrategy) -> String {
-        let label = strategy.label(self.sampler);
-        if self.guiding { format!("{label} + guiding") } else { label }
+        let mut label = strategy.label(self.sampler);
+        if self.guiding {
+            label += " + guiding";
+        }
+        if !self.caustics {
+            label += ", caustics off";
+        }
+        label
     }
 }
 
@@ -147,7 +156,7 @@ fn accumulate(
     orders: &Receiver<Order>,
     reports: &Sender<Report>,
 ) -> Option<View> {
-    let settings = RenderSettings { guiding: view.guiding, ..plan.settings };
+    let settings = RenderSettings { guiding: view.guiding, caustics: view.caustics, ..plan.settings };
     let size = settings.resolution;
     // Called off: a new view or the end is on its way; wait for it.
     let mut called_off = false;
