@@ -120,16 +120,38 @@ fn lamps_seen(
             return;
         }
         let through = if medium != Rgb::ZERO { transmittance(medium, hit.t * ray.dir.length()) } else { Rgb::ONE };
-        let watch = Stopwatch::start(counters.timing);
-        let through_glass = chain.lamp_weight(scene, strategy, hit, id, counters);
-        watch.stop(&mut counters.time.glass);
-        let weight = match through_glass {
-            Some(w) => w,
-            None => bsdf_hit_weight(strategy, id, prev, |ctx| light.pdf_li(ctx.p, hit.p, hit.n), counters),
-        };
+        let weight = hit_weight(
+            strategy,
+            id,
+            prev,
+            |counters| chain.lamp_weight(scene, strategy, hit, id, counters),
+            |ctx| light.pdf_li(ctx.p, hit.p, hit.n),
+            counters,
+        );
         l += hit.radiance * through * weight;
     });
     l
+}
+
+/// The MIS weight of the light of light `id` a path met: against the connection through glass
+/// where `through_glass` gives one (the path came along a chain from a receiver; timed as
+/// connection work), else [`bsdf_hit_weight`] with the light's density `light_pdf`.
+#[inline]
+fn hit_weight(
+    strategy: &LightStrategy,
+    id: u32,
+    prev: Option<Previous>,
+    through_glass: impl FnOnce(&mut RayCounters) -> Option<f32>,
+    light_pdf: impl FnOnce(&ShadingContext) -> f32,
+    counters: &mut RayCounters,
+) -> f32 {
+    let watch = Stopwatch::start(counters.timing);
+    let weight = through_glass(counters);
+    watch.stop(&mut counters.time.glass);
+    match weight {
+        Some(w) => w,
+        None => bsdf_hit_weight(strategy, id, prev, light_pdf, counters),
+    }
 }
 
 /// The MIS weight of light `id` reached by a BSDF-sampled ray from `prev` (1 for a camera
@@ -176,13 +198,14 @@ fn emitted(
     if le == Rgb::ZERO {
         return le;
     }
-    let watch = Stopwatch::start(counters.timing);
-    let through_glass = chain.weight(scene, strategy, hit, id, counters);
-    watch.stop(&mut counters.time.glass);
-    let weight = match through_glass {
-        Some(w) => w,
-        None => bsdf_hit_weight(strategy, id, prev, |ctx| light.pdf_li(ctx.p, hit.p, hit.n_geom), counters),
-    };
+    let weight = hit_weight(
+        strategy,
+        id,
+        prev,
+        |counters| chain.weight(scene, strategy, hit, id, counters),
+        |ctx| light.pdf_li(ctx.p, hit.p, hit.n_geom),
+        counters,
+    );
     beta * le * weight
 }
 
