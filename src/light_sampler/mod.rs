@@ -153,7 +153,6 @@ impl AnyLightSampler {
         match self {
             AnyLightSampler::Tree(s) => s.sample_hinting(ctx, u, |i| prefetch(lights, i as usize)),
             AnyLightSampler::Learned(s) => s.sample_hinting(ctx, u, |i| prefetch(lights, i as usize)),
-            AnyLightSampler::Cells(s) => s.sample_hinting(ctx, u, |i| prefetch(lights, i as usize)),
             _ => self.sample(ctx, u),
         }
     }
@@ -218,12 +217,15 @@ impl LightStrategy {
             LightSamplerKind::Cells if lights.len() <= EVERY_LIGHT_UP_TO => {
                 LightStrategy::EveryAtDiffuse(AnyLightSampler::Tree(LightTree::new(lights)))
             }
-            LightSamplerKind::Cells => {
-                LightStrategy::One(match CellSampler::new(lights, LightTree::new(lights), scene_centre, scene_radius) {
-                    Ok(cells) => AnyLightSampler::Cells(Box::new(cells)),
-                    Err(tree) => AnyLightSampler::Tree(*tree),
-                })
-            }
+            LightSamplerKind::Cells => match cells::halvings(lights.len()) {
+                Some(halvings) => LightStrategy::One(AnyLightSampler::Cells(Box::new(CellSampler::new(
+                    lights,
+                    scene_centre,
+                    scene_radius,
+                    halvings,
+                )))),
+                None => LightStrategy::One(AnyLightSampler::Tree(LightTree::new(lights))),
+            },
         }
     }
 
@@ -251,7 +253,7 @@ impl LightStrategy {
 
     /// What chooses the lights, in words, for a strategy built as `kind`: the kind's name
     /// where it is what chooses, else the kind and what chooses in its place
-    /// (`cells (as tree)` over 6 lights), so that no summary, status bar or report calls
+    /// (`cells (as tree)` over 9 229 lights), so that no summary, status bar or report calls
     /// a render by a sampler it did not use.
     pub fn label(&self, kind: LightSamplerKind) -> String {
         let chooser = match self {
@@ -332,8 +334,7 @@ mod tests {
             .collect();
         let label = |kind, n: usize| LightStrategy::build(kind, &lights[..n], Vec3A::ZERO, 10.0).label(kind);
         assert_eq!(label(LightSamplerKind::Cells, 100), "cells");
-        assert_eq!(label(LightSamplerKind::Cells, 2000), "cells");
-        assert_eq!(label(LightSamplerKind::Cells, CELLS_MIN_LIGHTS - 1), "cells (as tree)");
+        assert_eq!(label(LightSamplerKind::Cells, 2000), "cells (as tree)");
         assert_eq!(label(LightSamplerKind::Cells, 3), "cells (as every light at diffuse points, tree elsewhere)");
         assert_eq!(label(LightSamplerKind::Tree, 3), "tree");
         assert_eq!(label(LightSamplerKind::All, 3), "all");
