@@ -35,12 +35,13 @@ fn selection(c: &mut Criterion) {
     let mut group = c.benchmark_group("light_select");
     for n in [100usize, 10_000, 1_000_000] {
         let lights = triangles(n);
-        let cells = (n <= myriad::light_sampler::CELLS_MAX_LIGHTS).then_some(LightSamplerKind::Cells);
-        for kind in
-            [LightSamplerKind::Uniform, LightSamplerKind::Power, LightSamplerKind::Local, LightSamplerKind::Tree]
-                .into_iter()
-                .chain(cells)
-        {
+        for kind in [
+            LightSamplerKind::Uniform,
+            LightSamplerKind::Power,
+            LightSamplerKind::Local,
+            LightSamplerKind::Tree,
+            LightSamplerKind::Cells,
+        ] {
             if kind == LightSamplerKind::Local && n > 10_000 {
                 group.sample_size(10);
             }

@@ -27,7 +27,9 @@ pub enum LightSamplerKind {
     /// One light, by descending a light BVH with the same importance (O(log n)).
     Tree,
     /// One light, from a table per cell of space of `local`'s importances (a look-up per
-    /// choice; for 8 to 1024 lights, the tree outside that range and in cells next to lights).
+    /// choice; over more than 1024 lights, at diffuse points a table of the tree's clusters and
+    /// the tree below, at glossy ones the tree;
+    /// the tree under 8 lights and in cells next to lights).
     Cells,
     /// The light BVH, its first levels reweighted per region of the scene by how much of
     /// each cluster's light earlier passes saw arrive (occlusion learned).

@@ -329,15 +329,18 @@ impl fmt::Display for RenderReport {
             };
             writeln!(
                 f,
-                "cells      not used with {lights} lights (its tables are for {} to {} lights, within a quarter of the memory limit): {chose}",
+                "cells      not used with {lights} lights (its tables are for {} lights or more, within a quarter of the memory limit): {chose}",
                 crate::light_sampler::CELLS_MIN_LIGHTS,
-                crate::light_sampler::CELLS_MAX_LIGHTS
             )?;
         }
         if let Some(c) = &self.cells {
+            let over = match c.clusters {
+                0 => String::new(),
+                n => format!(" over {n} clusters of lights (the tree chooses within them)"),
+            };
             writeln!(
                 f,
-                "cells      {} tables in cells of {:.3} m and their parts (halvings up to {}: {} split, {} left to the tree), {}",
+                "cells      {} tables{over} in cells of {:.3} m and their parts (halvings up to {}: {} split, {} left to the tree), {}",
                 c.tables,
                 c.edge,
                 c.halvings,

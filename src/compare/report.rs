@@ -50,7 +50,7 @@ pub struct SamplerResult {
     /// Sampler name.
     pub sampler: String,
     /// What chose the lights: the sampler's name, or it and what stood in for it
-    /// (`cells (as tree)` over 9 229 lights).
+    /// (`cells (as tree)` over 6 lights).
     pub label: String,
     /// Light-sampler build seconds.
     pub build_seconds: f64,

@@ -122,8 +122,8 @@ pub fn estimate_direct(
     tally: &mut Tally,
 ) -> Rgb {
     let sp = &scattering.sp;
-    let every = strategy.takes_every_light(sp.is_diffuse());
-    match strategy.sampler().filter(|_| !every) {
+    let diffuse = sp.is_diffuse();
+    match strategy.sampler().filter(|_| !strategy.takes_every_light(diffuse)) {
         None => scene
             .lights
             .iter()
@@ -138,8 +138,9 @@ pub fn estimate_direct(
             let u_point = stream.get_2d_u64(bounce, Dim::LightPoint, 0);
             let ctx = ShadingContext { p, n: sp.selection_normal() };
             let rays = &mut tally.rays;
-            let choice =
-                timed(rays.timing, &mut rays.time.choice, || sampler.sample_prefetching(&ctx, u_select, &scene.lights));
+            let choice = timed(rays.timing, &mut rays.time.choice, || {
+                sampler.sample_prefetching(&ctx, diffuse, u_select, &scene.lights)
+            });
             match choice {
                 Some(s) => {
                     debug_assert!(s.pmf > 0.0);

@@ -67,8 +67,9 @@ struct Previous {
     ctx: ShadingContext,
     /// The density with which its BSDF chose the ray.
     bsdf_pdf: f32,
-    /// Whether next-event estimation there took every light.
-    every_light: bool,
+    /// Whether its BSDF is Lambert's (what next-event estimation there chose by:
+    /// [`LightStrategy::selection_pmf`]).
+    diffuse: bool,
 }
 
 /// Radiance from the environment and the suns with an angle along `dir` for a ray that left
@@ -169,7 +170,7 @@ fn bsdf_hit_weight(
         None => 1.0,
         Some(v) => {
             let pmf = timed(counters.timing, &mut counters.time.choice, || {
-                strategy.selection_pmf(&v.ctx, LightId(id), v.every_light)
+                strategy.selection_pmf(&v.ctx, LightId(id), v.diffuse)
             });
             power_heuristic(v.bsdf_pdf, pmf * light_pdf(&v.ctx))
         }
@@ -350,10 +351,10 @@ impl Tracer<'_> {
             let left = Previous {
                 ctx: ShadingContext { p: hit.p, n: sp.selection_normal() },
                 bsdf_pdf: bs.pdf,
-                every_light: strategy.takes_every_light(sp.is_diffuse()),
+                diffuse: sp.is_diffuse(),
             };
             chain = match glass {
-                _ if receiver => GlassChain::leaving(left.ctx, left.every_light, sp.n_geom, left.bsdf_pdf),
+                _ if receiver => GlassChain::leaving(left.ctx, left.diffuse, sp.n_geom, left.bsdf_pdf),
                 Some(_) if bs.wi.dot(sp.n_geom) < 0.0 => chain.through(hit.p),
                 _ => GlassChain::default(),
             };

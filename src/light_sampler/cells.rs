@@ -18,23 +18,33 @@
 //! over the cell's [`Table16`] (lights in `local`'s Morton order, 2¹⁶ values shared among
 //! them: with the uniform share each of at
 //! most [`MAX_LIGHTS`] lights owns at least 6), with no importance evaluated, where the
-//! tree evaluates four on every level it descends.
+//! tree evaluates eight on every level it descends.
+//!
+//! Over more than [`MAX_LIGHTS`] lights the tables choose among the light tree's clusters
+//! instead (the nodes at its first levels, as many levels as keep them within
+//! [`MAX_LIGHTS`]: [`Entries::Clusters`]), weighed by their bounds as their parents in the
+//! tree weigh them, and the tree chooses below the chosen cluster with the values that
+//! chose it. It does so at diffuse (Lambert) points only, and the tree chooses at the
+//! others: there the tables' cell-wide weights starve a point or spot light whose highlight
+//! the surface mirrors (on `lobby.glb` they halved the error of most pixels but made a seed
+//! in ten 100× worse; the performance page). At diffuse points they are 1.25× the tree's
+//! efficiency on `street.ron`, 1.13–1.16× on `rooms.ron` and `instanced_lamps.glb`.
 //!
 //! A cell's content is a pure function of the cell, so which thread builds it first changes
 //! nothing: images are bit-identical for any thread count and any split of the samples, and
 //! the pmf at a BSDF hit is the one the light was sampled with (the same cell, the same table
-//! or the same tree). Only cells that shading points reach are built, 2 bytes per light each
+//! or the same tree). Only cells that shading points reach are built, 2 bytes per entry each
 //! ([`most_bytes`] bounds them, and [`halvings`] keeps the bound within a quarter of the
-//! memory limit); the sampler takes [`MIN_LIGHTS`] to [`MAX_LIGHTS`] lights (outside, or
-//! where not even whole grid cells fit, `LightStrategy::build` builds the `tree` in its
-//! place, and the render summary says so).
+//! memory limit); the sampler takes [`MIN_LIGHTS`] lights or more (with fewer, or where not
+//! even whole grid cells fit, `LightStrategy::build` takes the `tree` in its place, and the
+//! render summary says so).
 
 use std::sync::OnceLock;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use super::grid::{self, SceneGrid};
 use super::local::LocalSampler;
-use super::tree::LightTree;
+use super::tree::{Frontier, LightTree};
 use super::{LightSampler, SampledLight, ShadingContext};
 use crate::light::{Light, LightId};
 use crate::math::Vec3A;
@@ -74,8 +84,9 @@ pub const MIN_LIGHTS: usize = 8;
 /// memory ([`most_bytes`]) grows eight times with it, so a sampler halves fewer times where
 /// that bound would not fit ([`halvings`]).
 pub const SPLITS: u32 = 2;
-/// Most lights the sampler takes. With 16-bit tables drawn through their summary, 1024
-/// pays: cornell-32x32, 64 spp, 8 seeds, relMSE·spp 0.289 against the tree's 0.309 and
+/// Most entries a table chooses among: up to this many lights, the lights; above, the
+/// clusters of the light tree's first levels ([`Entries::Clusters`]). With 16-bit tables
+/// drawn through their summary, 1024 lights pay: cornell-32x32, 64 spp, 8 seeds, relMSE·spp 0.289 against the tree's 0.309 and
 /// uniform's 0.411, at 7241 instructions a sample against 9831 and 6901; offices.ron, 768
 /// lights, 0.137 against the tree's 0.146 at 18 252 instructions against 24 743 (with
 /// 8-byte tables cornell-32x32 had been 0.88 of the tree's efficiency). With the uniform
@@ -126,6 +137,8 @@ pub struct CellStats {
     pub edge: f32,
     /// Most halvings of a grid cell ([`halvings`]).
     pub halvings: u32,
+    /// The tree's clusters the tables choose among, or 0 where they choose among the lights.
+    pub clusters: usize,
     /// Cells (grid cells and halves of them) with a table.
     pub tables: usize,
     /// Cells split into halves.
@@ -136,10 +149,65 @@ pub struct CellStats {
     pub memory_bytes: usize,
 }
 
-/// Per-cell light tables over at most [`MAX_LIGHTS`] lights, the tree where they fail.
+/// What a cell's table chooses among.
+#[derive(Clone, Debug)]
+enum Entries {
+    /// Every light, in `local`'s Morton order: up to [`MAX_LIGHTS`] lights.
+    Lights(LocalSampler),
+    /// The clusters of the tree's first levels, as many levels as keep them within
+    /// [`MAX_LIGHTS`] (in depth-first order, so neighbours in space): the tree chooses below
+    /// the cluster a table chose, with the values that chose it, so a light's pmf is still
+    /// exactly the share of the 2⁶⁴ values that reach it. At points whose BSDF is not
+    /// Lambert's the tree chooses from its root ([`CellSampler::sample_at`]).
+    Clusters(Frontier),
+}
+
+impl Entries {
+    /// The entries for `lights` lights over `tree`: the lights themselves, or the largest
+    /// frontier of the tree within [`MAX_LIGHTS`] clusters.
+    fn over(lights: &[Light], tree: &LightTree) -> Self {
+        if lights.len() <= MAX_LIGHTS {
+            return Entries::Lights(LocalSampler::new(lights));
+        }
+        let mut frontier = Frontier::new(tree, 1);
+        for levels in 2..=tree.stats().depth {
+            let deeper = Frontier::new(tree, levels);
+            if deeper.clusters as usize > MAX_LIGHTS {
+                break;
+            }
+            frontier = deeper;
+        }
+        Entries::Clusters(frontier)
+    }
+
+    fn len(&self) -> usize {
+        match self {
+            Entries::Lights(local) => local.lights(),
+            Entries::Clusters(f) => f.clusters as usize,
+        }
+    }
+
+    /// Every entry's importance at `ctx`, in entry order.
+    fn importances(&self, tree: &LightTree, ctx: &ShadingContext, out: &mut Vec<f32>) {
+        match self {
+            Entries::Lights(local) => local.importances(ctx, out),
+            Entries::Clusters(f) => f.importances(tree, ctx, out),
+        }
+    }
+
+    fn memory_bytes(&self) -> usize {
+        match self {
+            Entries::Lights(local) => local.memory_bytes(),
+            Entries::Clusters(f) => f.memory_bytes(),
+        }
+    }
+}
+
+/// Per-cell tables over the lights, or over clusters of them where there are more than
+/// [`MAX_LIGHTS`]; the tree where they fail.
 #[derive(Debug)]
 pub struct CellSampler {
-    local: LocalSampler,
+    entries: Entries,
     tree: LightTree,
     grid: SceneGrid,
     /// Most halvings of a grid cell before the tree takes over.
@@ -156,7 +224,7 @@ impl Clone for CellSampler {
     /// A sampler over the same lights with no cell built yet (each rebuilds the same).
     fn clone(&self) -> Self {
         Self {
-            local: self.local.clone(),
+            entries: self.entries.clone(),
             tree: self.tree.clone(),
             cells: empty_cells(),
             tables: AtomicUsize::new(0),
@@ -172,15 +240,24 @@ fn empty_cells() -> Vec<OnceLock<Cell>> {
 }
 
 impl CellSampler {
-    /// A sampler over `lights` (1 to [`MAX_LIGHTS`]) in a scene whose bounding sphere has
-    /// centre `centre` and radius `radius`, halving its cells up to `halvings` (at most
+    /// A sampler over `lights`, whose light tree is `tree`, in a scene whose bounding sphere
+    /// has centre `centre` and radius `radius`; the tree back where tables would not do
+    /// (fewer than [`MIN_LIGHTS`] lights, or not even whole grid cells fit: [`halvings`]).
+    pub fn new(lights: &[Light], tree: LightTree, centre: Vec3A, radius: f32) -> Result<Self, Box<LightTree>> {
+        let entries = Entries::over(lights, &tree);
+        match halvings(entries.len()) {
+            Some(halvings) => Ok(Self::with(entries, tree, centre, radius, halvings)),
+            None => Err(Box::new(tree)),
+        }
+    }
+
+    /// A sampler choosing among `entries`, halving its cells up to `halvings` (at most
     /// [`SPLITS`]) times.
-    pub fn new(lights: &[Light], centre: Vec3A, radius: f32, halvings: u32) -> Self {
-        assert!(!lights.is_empty() && lights.len() <= MAX_LIGHTS, "1 to {MAX_LIGHTS} lights");
+    fn with(entries: Entries, tree: LightTree, centre: Vec3A, radius: f32, halvings: u32) -> Self {
         assert!(halvings <= SPLITS, "at most {SPLITS} halvings");
         Self {
-            local: LocalSampler::new(lights),
-            tree: LightTree::new(lights),
+            entries,
+            tree,
             grid: SceneGrid::new(centre, radius),
             halvings,
             cells: empty_cells(),
@@ -194,11 +271,15 @@ impl CellSampler {
     pub fn stats(&self) -> CellStats {
         let load = |c: &AtomicUsize| c.load(Ordering::Relaxed);
         let (tables, splits, on_tree) = (load(&self.tables), load(&self.splits), load(&self.on_tree));
-        let memory_bytes = self.local.memory_bytes()
+        let memory_bytes = self.entries.memory_bytes()
             + self.tree.stats().memory_bytes
             + (self.cells.len() + 8 * splits) * std::mem::size_of::<OnceLock<Cell>>()
-            + tables * Table16::bytes_for(self.local.lights());
-        CellStats { edge: self.grid.edge(), halvings: self.halvings, tables, splits, on_tree, memory_bytes }
+            + tables * Table16::bytes_for(self.entries.len());
+        let clusters = match &self.entries {
+            Entries::Lights(_) => 0,
+            Entries::Clusters(f) => f.clusters as usize,
+        };
+        CellStats { edge: self.grid.edge(), halvings: self.halvings, clusters, tables, splits, on_tree, memory_bytes }
     }
 
     /// The tree's choice, out of line: it is the rare case, and inlined beside the table's
@@ -258,10 +339,10 @@ impl CellSampler {
         slot.get_or_init(|| self.build(corner, edge, bin, level))
     }
 
-    /// Every light's importance at `p` along `n` as a share of their sum (`None` when all
+    /// Every entry's importance at `p` along `n` as a share of their sum (`None` when all
     /// are 0); `w` is scratch.
     fn shares(&self, p: Vec3A, n: Vec3A, w: &mut Vec<f32>) -> Option<Vec<f64>> {
-        self.local.importances(&ShadingContext { p, n }, w);
+        self.entries.importances(&self.tree, &ShadingContext { p, n }, w);
         let total: f64 = w.iter().map(|&x| x.max(0.0) as f64).sum();
         (total > 0.0 && total.is_finite()).then(|| w.iter().map(|&x| x.max(0.0) as f64 / total).collect())
     }
@@ -287,12 +368,12 @@ impl CellSampler {
         cell
     }
 
-    /// The table of a cube: the mean of the lights' shares at its centre and its eight
+    /// The table of a cube: the mean of the entries' shares at its centre and its eight
     /// corners (a surface through the cube may pass near any of them), or `None` when at
-    /// one of those points some light would get more than `trust` times the table's
+    /// one of those points some entry would get more than `trust` times the table's
     /// probability.
     fn table(&self, corner: Vec3A, edge: f32, n: Vec3A, trust: f32) -> Option<Table16> {
-        let count = self.local.lights();
+        let count = self.entries.len();
         let points = (0..8)
             .map(|k| corner + Vec3A::new((k & 1) as f32, ((k >> 1) & 1) as f32, (k >> 2) as f32) * edge)
             .chain([corner + Vec3A::splat(0.5 * edge)]);
@@ -318,24 +399,69 @@ impl CellSampler {
     }
 }
 
+impl CellSampler {
+    /// [`LightSampler::sample`] at a point whose BSDF is Lambert's or not (`diffuse`),
+    /// calling `leaf_hint` as [`LightTree::sample_hinting`] does where the tree chooses.
+    /// Tables over clusters choose at diffuse points only; at the others the tree does (see
+    /// [`Entries::Clusters`]).
+    #[inline]
+    pub fn sample_at(
+        &self,
+        ctx: &ShadingContext,
+        diffuse: bool,
+        u: u64,
+        leaf_hint: impl Fn(u32),
+    ) -> Option<SampledLight> {
+        if !diffuse && self.tree_at_glossy() {
+            return self.tree.sample_hinting(ctx, u, leaf_hint);
+        }
+        let Some(t) = self.choice(ctx) else { return self.tree_sample(ctx, u) };
+        let (index, pmf) = t.sample(u);
+        match &self.entries {
+            Entries::Lights(local) => Some(SampledLight { light: local.light_at(index), pmf }),
+            Entries::Clusters(f) => {
+                let (start, end) = t.interval(index);
+                self.tree.sample_below(ctx, f.head(index as u32), u as u128 - start, end - start, leaf_hint)
+            }
+        }
+    }
+
+    /// [`LightSampler::interval`] at a point whose BSDF is Lambert's or not (`diffuse`): what
+    /// [`sample_at`](Self::sample_at) chooses `light` with.
+    #[inline]
+    pub fn interval_at(&self, ctx: &ShadingContext, diffuse: bool, light: LightId) -> (u128, u128) {
+        if !diffuse && self.tree_at_glossy() {
+            return self.tree.interval(ctx, light);
+        }
+        let Some(t) = self.choice(ctx) else { return self.tree_interval(ctx, light) };
+        match &self.entries {
+            Entries::Lights(local) => t.interval(local.slot_of(light)),
+            Entries::Clusters(f) => {
+                let cluster = f.cluster[light.0 as usize];
+                let (start, end) = t.interval(cluster as usize);
+                self.tree.interval_below_cluster(ctx, light, f.head(cluster), (start, end - start))
+            }
+        }
+    }
+
+    /// Whether the tree chooses at points whose BSDF is not Lambert's: where tables choose
+    /// among clusters.
+    #[inline]
+    fn tree_at_glossy(&self) -> bool {
+        matches!(self.entries, Entries::Clusters(_))
+    }
+}
+
+/// The sampler at diffuse points (its tables wherever they stand).
 impl LightSampler for CellSampler {
     #[inline]
     fn sample(&self, ctx: &ShadingContext, u: u64) -> Option<SampledLight> {
-        match self.choice(ctx) {
-            Some(t) => {
-                let (index, pmf) = t.sample(u);
-                Some(SampledLight { light: self.local.light_at(index), pmf })
-            }
-            None => self.tree_sample(ctx, u),
-        }
+        self.sample_at(ctx, true, u, |_| {})
     }
 
     #[inline]
     fn interval(&self, ctx: &ShadingContext, light: LightId) -> (u128, u128) {
-        match self.choice(ctx) {
-            Some(t) => t.interval(self.local.slot_of(light)),
-            None => self.tree_interval(ctx, light),
-        }
+        self.interval_at(ctx, true, light)
     }
 }
 
@@ -356,7 +482,8 @@ mod tests {
     }
 
     fn sampler(lights: &[Light]) -> CellSampler {
-        CellSampler::new(lights, Vec3A::new(1.75, 1.5, 1.0), 4.0, SPLITS)
+        let tree = LightTree::new(lights);
+        CellSampler::with(Entries::over(lights, &tree), tree, Vec3A::new(1.75, 1.5, 1.0), 4.0, SPLITS)
     }
 
     #[test]
@@ -429,6 +556,57 @@ mod tests {
         }
         cells.sort();
         assert!(cells.windows(2).all(|c| c[0].1 == c[1].0) && cells[0].0 == 0 && cells.last().unwrap().1 == 1 << 64);
+    }
+
+    #[test]
+    fn over_more_lights_than_a_table_takes_tables_choose_clusters_and_the_tree_within_them() {
+        // A ceiling of 1500 lamps: more than MAX_LIGHTS, so tables over the tree's clusters.
+        let lights = lamps(1500);
+        let s = sampler(&lights);
+        let Entries::Clusters(f) = &s.entries else { panic!("1500 lights: clusters") };
+        assert!((64..=MAX_LIGHTS as u32).contains(&f.clusters), "{} clusters", f.clusters);
+        for ctx in [
+            ShadingContext { p: Vec3A::new(1.0, 0.0, 40.0), n: Vec3A::Y },
+            ShadingContext { p: Vec3A::new(2.0, 1.9, 90.0), n: Vec3A::Y },
+            ShadingContext { p: Vec3A::new(3.0, 1.0, 20.0), n: Vec3A::ZERO },
+        ] {
+            assert!(s.choice(&ctx).is_some(), "{ctx:?}: a table");
+            check_tiling(&s, &ctx, 1500);
+            // Every value picks the light whose interval holds it, with that interval's pmf.
+            for k in 0..2000u64 {
+                let u = k.wrapping_mul(0x9e37_79b9_7f4a_7c15);
+                let Some(picked) = s.sample(&ctx, u) else { continue };
+                let (a, b) = s.interval(&ctx, picked.light);
+                assert!(a <= u as u128 && (u as u128) < b);
+                assert_eq!(picked.pmf, crate::math::distribution::probability(b - a));
+            }
+        }
+        assert!(s.stats().tables >= 3, "{:?}", s.stats());
+    }
+
+    #[test]
+    fn over_clusters_the_tree_chooses_at_glossy_points_and_the_tables_at_diffuse_ones() {
+        let lights = lamps(1500);
+        let s = sampler(&lights);
+        let ctx = ShadingContext { p: Vec3A::new(1.0, 0.0, 40.0), n: Vec3A::Y };
+        let (mut same, mut differ) = (0, 0);
+        for k in 0..500u64 {
+            let u = k.wrapping_mul(0x9e37_79b9_7f4a_7c15);
+            assert_eq!(s.sample_at(&ctx, false, u, |_| {}), s.tree.sample(&ctx, u));
+            let picked = s.sample_at(&ctx, true, u, |_| {}).expect("a lamp above");
+            let (a, b) = s.interval_at(&ctx, true, picked.light);
+            assert!(a <= u as u128 && (u as u128) < b);
+            let light = picked.light;
+            assert_eq!(s.interval_at(&ctx, false, light), s.tree.interval(&ctx, light));
+            if s.interval_at(&ctx, true, light) == s.tree.interval(&ctx, light) { same += 1 } else { differ += 1 }
+        }
+        assert!(differ > same, "the tables choose otherwise than the tree: {differ} against {same}");
+        // Over the lights themselves, the tables choose at glossy points too.
+        let few = sampler(&lamps(40));
+        let below = ShadingContext { p: Vec3A::new(0.2, 0.0, 0.2), n: Vec3A::Y };
+        for l in 0..40 {
+            assert_eq!(few.interval_at(&below, false, LightId(l)), few.interval_at(&below, true, LightId(l)));
+        }
     }
 
     #[test]

@@ -146,14 +146,37 @@ impl AnyLightSampler {
         }
     }
 
-    /// [`LightSampler::sample`], fetching the candidate lights from `lights` while the tree
-    /// chooses among them (the other samplers choose without looking at any light).
+    /// [`LightSampler::sample`] at a point whose BSDF is Lambert's or not (`diffuse`: `cells`
+    /// over clusters leaves other points to the tree), fetching the candidate lights from
+    /// `lights` while the tree chooses among them (the other samplers choose without looking
+    /// at any light).
     #[inline]
-    pub fn sample_prefetching(&self, ctx: &ShadingContext, u: u64, lights: &[Light]) -> Option<SampledLight> {
+    pub fn sample_prefetching(
+        &self,
+        ctx: &ShadingContext,
+        diffuse: bool,
+        u: u64,
+        lights: &[Light],
+    ) -> Option<SampledLight> {
+        let hint = |i: u32| prefetch(lights, i as usize);
         match self {
-            AnyLightSampler::Tree(s) => s.sample_hinting(ctx, u, |i| prefetch(lights, i as usize)),
-            AnyLightSampler::Learned(s) => s.sample_hinting(ctx, u, |i| prefetch(lights, i as usize)),
+            AnyLightSampler::Tree(s) => s.sample_hinting(ctx, u, hint),
+            AnyLightSampler::Learned(s) => s.sample_hinting(ctx, u, hint),
+            AnyLightSampler::Cells(s) => s.sample_at(ctx, diffuse, u, hint),
             _ => self.sample(ctx, u),
+        }
+    }
+
+    /// [`LightSampler::pmf`] at a point whose BSDF is Lambert's or not: what
+    /// [`sample_prefetching`](Self::sample_prefetching) chose with.
+    #[inline]
+    pub fn pmf_at(&self, ctx: &ShadingContext, diffuse: bool, light: LightId) -> f32 {
+        match self {
+            AnyLightSampler::Cells(s) => {
+                let (start, end) = s.interval_at(ctx, diffuse, light);
+                probability(end - start)
+            }
+            _ => self.pmf(ctx, light),
         }
     }
 
@@ -217,15 +240,12 @@ impl LightStrategy {
             LightSamplerKind::Cells if lights.len() <= EVERY_LIGHT_UP_TO => {
                 LightStrategy::EveryAtDiffuse(AnyLightSampler::Tree(LightTree::new(lights)))
             }
-            LightSamplerKind::Cells => match cells::halvings(lights.len()) {
-                Some(halvings) => LightStrategy::One(AnyLightSampler::Cells(Box::new(CellSampler::new(
-                    lights,
-                    scene_centre,
-                    scene_radius,
-                    halvings,
-                )))),
-                None => LightStrategy::One(AnyLightSampler::Tree(LightTree::new(lights))),
-            },
+            LightSamplerKind::Cells => {
+                LightStrategy::One(match CellSampler::new(lights, LightTree::new(lights), scene_centre, scene_radius) {
+                    Ok(cells) => AnyLightSampler::Cells(Box::new(cells)),
+                    Err(tree) => AnyLightSampler::Tree(*tree),
+                })
+            }
         }
     }
 
@@ -240,20 +260,21 @@ impl LightStrategy {
         }
     }
 
-    /// Probability that next-event estimation at `ctx` picks `light`: 1 at a point where it
-    /// took every light (`every`, [`takes_every_light`](Self::takes_every_light)), else the
-    /// sampler's pmf. What NEE divides by and what the MIS weight at an emitter hit asks.
+    /// Probability that next-event estimation at `ctx`, a point whose BSDF is Lambert's or
+    /// not (`diffuse`), picks `light`: 1 where it took every light
+    /// ([`takes_every_light`](Self::takes_every_light)), else the sampler's pmf there. What
+    /// NEE divides by and what the MIS weight at an emitter hit asks.
     #[inline]
-    pub fn selection_pmf(&self, ctx: &ShadingContext, light: LightId, every: bool) -> f32 {
+    pub fn selection_pmf(&self, ctx: &ShadingContext, light: LightId, diffuse: bool) -> f32 {
         match self.sampler() {
-            Some(s) if !every => s.pmf(ctx, light),
+            Some(s) if !self.takes_every_light(diffuse) => s.pmf_at(ctx, diffuse, light),
             _ => 1.0,
         }
     }
 
     /// What chooses the lights, in words, for a strategy built as `kind`: the kind's name
     /// where it is what chooses, else the kind and what chooses in its place
-    /// (`cells (as tree)` over 9 229 lights), so that no summary, status bar or report calls
+    /// (`cells (as tree)` over 6 lights), so that no summary, status bar or report calls
     /// a render by a sampler it did not use.
     pub fn label(&self, kind: LightSamplerKind) -> String {
         let chooser = match self {
@@ -334,7 +355,8 @@ mod tests {
             .collect();
         let label = |kind, n: usize| LightStrategy::build(kind, &lights[..n], Vec3A::ZERO, 10.0).label(kind);
         assert_eq!(label(LightSamplerKind::Cells, 100), "cells");
-        assert_eq!(label(LightSamplerKind::Cells, 2000), "cells (as tree)");
+        assert_eq!(label(LightSamplerKind::Cells, 2000), "cells");
+        assert_eq!(label(LightSamplerKind::Cells, CELLS_MIN_LIGHTS - 1), "cells (as tree)");
         assert_eq!(label(LightSamplerKind::Cells, 3), "cells (as every light at diffuse points, tree elsewhere)");
         assert_eq!(label(LightSamplerKind::Tree, 3), "tree");
         assert_eq!(label(LightSamplerKind::All, 3), "all");

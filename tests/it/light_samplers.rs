@@ -157,6 +157,25 @@ fn the_tree_at_a_hundred_thousand_lights_picks_as_its_pmf_says() {
     million_light_check(LightSamplerKind::Tree, 100_000, 4_000_000);
 }
 
+/// Above [`myriad::light_sampler::CELLS_MAX_LIGHTS`] lights `cells` tables choose among the
+/// tree's clusters and the tree below them: the contract holds as with fewer lights.
+#[test]
+fn cells_over_clusters_of_many_lights_picks_as_its_pmf_says() {
+    let lights = mixed_lights(3000);
+    assert!(lights.len() > myriad::light_sampler::CELLS_MAX_LIGHTS);
+    let strategy = LightStrategy::build(LightSamplerKind::Cells, &lights, Vec3A::ZERO, 10.0);
+    assert_eq!(strategy.label(LightSamplerKind::Cells), "cells");
+    let s = strategy.sampler().expect("one light at a time");
+    let ctxs = contexts(6);
+    let alpha = sidak(ctxs.len());
+    for (i, ctx) in ctxs.iter().enumerate() {
+        check_intervals_at(s, ctx, lights.len());
+        let r = pick_chi_square(s, ctx, lights.len(), 300_000, 40 + i as u64);
+        assert!(r.p > alpha, "at {ctx:?}: {r:?}");
+    }
+    assert!(strategy.cell_stats().is_some_and(|c| c.tables > 0));
+}
+
 #[test]
 fn power_sampler_is_proportional_to_the_brightest_channel_of_the_flux() {
     let lights = mixed_lights(50);
@@ -208,8 +227,14 @@ pub fn check_estimator_against_sum(sampler: &impl LightSampler, lights: &[Light]
 
 #[test]
 fn one_sample_estimator_matches_the_sum_over_point_lights() {
-    // 250 lights: within what `cells` takes (above, it is the tree).
-    let lights: Vec<Light> = (0..250u64)
+    // 250 lights: `cells` tables over the lights; 1500: over the tree's clusters.
+    for n in [250, 1500] {
+        estimator_matches_the_sum(n);
+    }
+}
+
+fn estimator_matches_the_sum(n: u64) {
+    let lights: Vec<Light> = (0..n)
         .map(|i| {
             Light::Point(PointLight {
                 position: Vec3A::new(rnd(i, 21) * 20.0 - 10.0, 0.5 + rnd(i, 22) * 3.0, rnd(i, 23) * 20.0 - 10.0),
@@ -220,7 +245,8 @@ fn one_sample_estimator_matches_the_sum_over_point_lights() {
     let ctxs: Vec<ShadingContext> = (0..6u64)
         .map(|i| ShadingContext { p: Vec3A::new(rnd(i, 31) * 16.0 - 8.0, 0.0, rnd(i, 32) * 16.0 - 8.0), n: Vec3A::Y })
         .collect();
-    let alpha = sidak(SAMPLERS.len() * ctxs.len());
+    // Two light counts, each every sampler at every context.
+    let alpha = sidak(2 * SAMPLERS.len() * ctxs.len());
     for kind in SAMPLERS {
         let s = one_light_sampler(kind, &lights);
         for ctx in &ctxs {

@@ -274,9 +274,10 @@ fn delta_along(
 /// A surface a path left where next-event estimation looks through glass.
 #[derive(Clone, Copy, Debug)]
 struct Receiver {
-    /// Its light-selection context, and whether next-event estimation there took every light.
+    /// Its light-selection context, and whether its BSDF is Lambert's (what next-event
+    /// estimation there chose by: [`LightStrategy::selection_pmf`]).
     ctx: ShadingContext,
-    every_light: bool,
+    diffuse: bool,
     /// Its geometric normal.
     n_geom: Vec3A,
     /// The density with which its scattering chose the direction the path left in.
@@ -314,12 +315,11 @@ impl GlassChain {
             })
     }
 
-    /// A path leaving a receiver at `ctx` (geometric normal `n_geom`; next-event estimation
-    /// took every light there: `every_light`) in a direction its scattering chose with
-    /// density `pdf`.
+    /// A path leaving a receiver at `ctx` (geometric normal `n_geom`; a Lambert BSDF there:
+    /// `diffuse`) in a direction its scattering chose with density `pdf`.
     #[inline]
-    pub fn leaving(ctx: ShadingContext, every_light: bool, n_geom: Vec3A, pdf: f32) -> Self {
-        Self { from: Some(Receiver { ctx, every_light, n_geom, pdf }), ..Self::default() }
+    pub fn leaving(ctx: ShadingContext, diffuse: bool, n_geom: Vec3A, pdf: f32) -> Self {
+        Self { from: Some(Receiver { ctx, diffuse, n_geom, pdf }), ..Self::default() }
     }
 
     /// The chain, one refraction through smooth glass at `p` longer.
@@ -395,7 +395,7 @@ impl GlassChain {
         if !self.is(&chain) {
             return 1.0;
         }
-        let pmf = strategy.selection_pmf(&from.ctx, LightId(id), from.every_light);
+        let pmf = strategy.selection_pmf(&from.ctx, LightId(id), from.diffuse);
         1.0 - connection_weight(&chain, n_y, pmf * density, |_| from.pdf).map_or(0.0, |(w, _)| w)
     }
 }

@@ -1,11 +1,20 @@
-//! The top of the tree as a learned sampler sees it: the nodes of its first levels, and the
-//! clusters their descent ends in there (the *frontier*).
+//! The top of the tree as a learned sampler and `cells` see it: the nodes of its first
+//! levels, and the clusters their descent ends in there (the *frontier*).
 //!
 //! Clusters are numbered depth-first, so every top node's child covers one run of them; a
 //! child's statistics are the sums over its run, and a light's observations need only its
 //! cluster.
 
+use super::super::ShadingContext;
 use super::{LEAF, LightTree, NONE, WIDTH};
+
+/// Where a descent below a cluster starts: the cluster's child slot content (a node, or
+/// [`LEAF`] and a light) and its level (the trail entries above it).
+#[derive(Clone, Copy, Debug)]
+pub struct Cluster {
+    pub(super) head: u32,
+    pub(super) level: u32,
+}
 
 /// The first levels of a [`LightTree`] and the clusters below them.
 #[derive(Clone, Debug)]
@@ -18,6 +27,10 @@ pub struct Frontier {
     pub cluster: Vec<u32>,
     /// Number of clusters.
     pub clusters: u32,
+    /// Per top node: its index in the tree.
+    tops: Vec<u32>,
+    /// Per cluster: where a descent below it starts.
+    heads: Vec<Cluster>,
 }
 
 impl Frontier {
@@ -28,6 +41,8 @@ impl Frontier {
             runs: Vec::new(),
             cluster: vec![0; tree.trails.len()],
             clusters: 0,
+            tops: Vec::new(),
+            heads: Vec::new(),
         };
         f.visit(tree, 0, 0, levels.max(1));
         f
@@ -37,20 +52,51 @@ impl Frontier {
         let slot = self.runs.len();
         self.slot[node] = slot as u32;
         self.runs.push([(0, 0); WIDTH]);
+        self.tops.push(node as u32);
         for (k, &c) in tree.nodes[node].children.iter().enumerate() {
             let first = self.clusters;
             if c == NONE {
                 continue;
             } else if c & LEAF != 0 {
                 self.cluster[(c & !LEAF) as usize] = first;
-                self.clusters += 1;
             } else if depth + 1 < levels {
                 self.visit(tree, c as usize, depth + 1, levels);
             } else {
                 self.mark(tree, c as usize, first);
+            }
+            if self.clusters == first {
+                self.heads.push(Cluster { head: c, level: depth + 1 });
                 self.clusters += 1;
             }
             self.runs[slot][k] = (first, self.clusters);
+        }
+    }
+
+    /// Whether child slot content `c` of a top node is a cluster (not a top node itself).
+    #[inline]
+    fn is_cluster(&self, c: u32) -> bool {
+        c != NONE && (c & LEAF != 0 || self.slot[c as usize] == u32::MAX)
+    }
+
+    /// Where the descent below cluster `id` starts.
+    #[inline]
+    pub fn head(&self, id: u32) -> Cluster {
+        self.heads[id as usize]
+    }
+
+    /// Fills `out` with every cluster's importance at `ctx` (as its parent weighs it), in
+    /// cluster order.
+    pub fn importances(&self, tree: &LightTree, ctx: &ShadingContext, out: &mut Vec<f32>) {
+        out.clear();
+        out.resize(self.clusters as usize, 0.0);
+        for (slot, &node) in self.tops.iter().enumerate() {
+            let n = &tree.nodes[node as usize];
+            let imp = n.decode(&tree.grid).importance(ctx.p, ctx.n).to_array();
+            for (k, &c) in n.children.iter().enumerate() {
+                if self.is_cluster(c) {
+                    out[self.runs[slot][k].0 as usize] = imp[k];
+                }
+            }
         }
     }
 
@@ -69,6 +115,9 @@ impl Frontier {
 
     /// Bytes held.
     pub fn memory_bytes(&self) -> usize {
-        self.slot.len() * 4 + self.runs.len() * std::mem::size_of::<[(u32, u32); WIDTH]>() + self.cluster.len() * 4
+        self.slot.len() * 4
+            + self.runs.len() * (std::mem::size_of::<[(u32, u32); WIDTH]>() + 4)
+            + self.cluster.len() * 4
+            + self.heads.len() * std::mem::size_of::<Cluster>()
     }
 }

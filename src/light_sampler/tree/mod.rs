@@ -27,7 +27,7 @@ mod collapse;
 mod compact;
 mod frontier;
 
-pub use frontier::Frontier;
+pub use frontier::{Cluster, Frontier};
 
 use std::time::{Duration, Instant};
 
@@ -275,8 +275,26 @@ impl LightTree {
         leaf_hint: impl Fn(u32),
         reweight: &impl Reweight,
     ) -> Option<SampledLight> {
-        // `u` as an offset into the run of `range` values that reached `node`.
-        let (mut u, mut range, mut node) = (u as u128, RANGE, 0usize);
+        self.descend(ctx, 0, u as u128, RANGE, leaf_hint, reweight)
+    }
+
+    /// The descent below `head` (a child slot's content: a node, or [`LEAF`] and a light)
+    /// for the selection values that reached it: `u`, an offset into their run of `range`.
+    /// `cells` starts it at the cluster its table chose.
+    #[inline]
+    fn descend(
+        &self,
+        ctx: &ShadingContext,
+        head: u32,
+        mut u: u128,
+        mut range: u128,
+        leaf_hint: impl Fn(u32),
+        reweight: &impl Reweight,
+    ) -> Option<SampledLight> {
+        if head & LEAF != 0 {
+            return Some(SampledLight { light: LightId(head & !LEAF), pmf: probability(range) });
+        }
+        let mut node = head as usize;
         for _ in 0..MAX_DEPTH {
             let n = &self.nodes[node];
             // The chosen child is known only after the importances: fetch all children
@@ -331,8 +349,57 @@ impl LightTree {
     /// [`sample_reweighted`](Self::sample_reweighted) draws with them.
     #[inline]
     pub fn interval_reweighted(&self, ctx: &ShadingContext, light: LightId, reweight: &impl Reweight) -> (u128, u128) {
-        let (mut trail, mut start, mut range, mut node) = (self.trails[light.0 as usize], 0u128, RANGE, 0usize);
-        for _ in 0..MAX_DEPTH {
+        self.interval_below(ctx, light, 0, 0, (0, RANGE), reweight)
+    }
+
+    /// The choice below `cluster` (of a [`Frontier`] of this tree) for the selection values
+    /// that reached it: `u`, an offset into their run of `range`; `leaf_hint` as for
+    /// [`sample_hinting`](Self::sample_hinting).
+    #[inline]
+    pub fn sample_below(
+        &self,
+        ctx: &ShadingContext,
+        cluster: Cluster,
+        u: u128,
+        range: u128,
+        leaf_hint: impl Fn(u32),
+    ) -> Option<SampledLight> {
+        self.descend(ctx, cluster.head, u, range, leaf_hint, &AsBuilt)
+    }
+
+    /// The interval of `light`, which lies below `cluster`, when the selection values
+    /// `(start, start + range)` reached the cluster: what [`sample_below`](Self::sample_below)
+    /// chooses it with.
+    #[inline]
+    pub fn interval_below_cluster(
+        &self,
+        ctx: &ShadingContext,
+        light: LightId,
+        cluster: Cluster,
+        reached: (u128, u128),
+    ) -> (u128, u128) {
+        self.interval_below(ctx, light, cluster.head, cluster.level, reached, &AsBuilt)
+    }
+
+    /// [`interval_reweighted`](Self::interval_reweighted) of `light` below `head` (a child
+    /// slot's content, `level` levels below the root, on the light's path) for the selection
+    /// values `(start, start + range)` that reached it.
+    #[inline]
+    fn interval_below(
+        &self,
+        ctx: &ShadingContext,
+        light: LightId,
+        head: u32,
+        level: u32,
+        (mut start, mut range): (u128, u128),
+        reweight: &impl Reweight,
+    ) -> (u128, u128) {
+        if head & LEAF != 0 {
+            debug_assert_eq!(head & !LEAF, light.0, "the head is another light");
+            return (start, start + range);
+        }
+        let (mut trail, mut node) = (self.trails[light.0 as usize] >> (level * TRAIL_BITS), head as usize);
+        for _ in level..MAX_DEPTH {
             let n = &self.nodes[node];
             let k = (trail % WIDTH as u128) as usize;
             trail >>= TRAIL_BITS;
