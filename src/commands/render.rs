@@ -336,7 +336,9 @@ impl fmt::Display for RenderReport {
         if let Some(c) = &self.cells {
             let over = match c.clusters {
                 0 => String::new(),
-                n => format!(" over {n} clusters of lights (the tree chooses within them)"),
+                n => format!(
+                    " over {n} clusters of lights at diffuse points (the tree chooses within them, and at glossy points)"
+                ),
             };
             writeln!(
                 f,

@@ -91,6 +91,20 @@ fn bad_grid_is_explained() {
 }
 
 #[test]
+fn over_many_lights_the_summary_says_the_tables_choose_among_clusters() {
+    let text = GOOD.replace(
+        "lights: [",
+        "lights: [ Grid(center: (0, 1.9, 0), normal: (0, -1, 0), extent: (1.6, 1.6), rows: 40, cols: 40, emission: Radiance(rgb: (1, 1, 1))),",
+    );
+    let (dir, _) = scene_file(&text);
+    let out = myriad(&["render", "scene.ron", "--spp", "4", "-o", "out.exr"], dir.path());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let summary = String::from_utf8_lossy(&out.stdout);
+    assert!(summary.contains("1601 lights") && summary.contains("sampler cells built"), "{summary}");
+    assert!(summary.contains("clusters of lights at diffuse points (the tree chooses within them"), "{summary}");
+}
+
+#[test]
 fn unwritable_output_fails_before_rendering_and_keeps_old_files() {
     let (dir, _) = scene_file(GOOD);
     let out = myriad(&["render", "scene.ron", "-o", "no/such/dir/out.exr", "--spp", "100000"], dir.path());
