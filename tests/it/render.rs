@@ -236,30 +236,36 @@ fn samplers_agree_on_cornell_9x9() {
     }
 }
 
-/// The default over a few lights takes every light at diffuse points and the tree's one at
-/// glossy ones, and weighs a BSDF ray that meets a lamp by whichever the vertex it left from
-/// did. With both kinds of vertex on the paths (a diffuse floor, a glossy metal wall, two
-/// coloured lamps close above them) it agrees with `all` and with the tree.
-#[test]
-fn every_light_at_diffuse_points_agrees_with_all_and_the_tree() {
-    let metal = Material { metallic: 1.0, roughness: 0.4, ..Material::diffuse("metal", Rgb::new(0.9, 0.7, 0.5)) };
+/// A diffuse floor and a glossy metal wall of roughness `roughness` behind it, seen from
+/// above at 24 × 18, lit by `lamps`: paths meet both kinds of vertex.
+fn floor_and_metal_wall(roughness: f32, lamps: Vec<LightDesc>) -> TestScene {
+    let metal = Material { metallic: 1.0, roughness, ..Material::diffuse("metal", Rgb::new(0.9, 0.7, 0.5)) };
     let floor =
         quad_mesh("floor", Vec3A::new(-2.0, 0.0, 2.0), Vec3A::new(4.0, 0.0, 0.0), Vec3A::new(0.0, 0.0, -4.0), 0);
     let wall = quad_mesh("wall", Vec3A::new(-2.0, 0.0, -1.0), Vec3A::new(4.0, 0.0, 0.0), Vec3A::new(0.0, 2.0, 0.0), 1);
-    // Large lamps low over the floor, facing it (edge1 × edge2 points down): BSDF rays from
-    // the floor meet them often, so a wrong MIS weight there shows.
-    let lamps = vec![
-        quad_light(Vec3A::new(-1.2, 0.4, -0.8), Vec3A::X, Vec3A::Z, Rgb::new(3.0, 0.5, 0.2), false),
-        quad_light(Vec3A::new(0.2, 0.35, -0.6), Vec3A::X * 0.8, Vec3A::Z * 0.8, Rgb::new(0.2, 0.5, 2.5), true),
-    ];
-    let scene = scene_from(
+    scene_from(
         vec![Material::diffuse("floor", Rgb::splat(0.7)), metal],
         vec![(floor, Mat4::IDENTITY), (wall, Mat4::IDENTITY)],
         lamps,
         Vec3A::new(0.0, 1.4, 2.4),
         Vec3A::new(0.0, 0.2, -0.4),
         UVec2::new(24, 18),
-    );
+    )
+}
+
+/// The default over a few lights takes every light at diffuse points and the tree's one at
+/// glossy ones, and weighs a BSDF ray that meets a lamp by whichever the vertex it left from
+/// did. With both kinds of vertex on the paths (a diffuse floor, a glossy metal wall, two
+/// coloured lamps close above them) it agrees with `all` and with the tree.
+#[test]
+fn every_light_at_diffuse_points_agrees_with_all_and_the_tree() {
+    // Large lamps low over the floor, facing it (edge1 × edge2 points down): BSDF rays from
+    // the floor meet them often, so a wrong MIS weight there shows.
+    let lamps = vec![
+        quad_light(Vec3A::new(-1.2, 0.4, -0.8), Vec3A::X, Vec3A::Z, Rgb::new(3.0, 0.5, 0.2), false),
+        quad_light(Vec3A::new(0.2, 0.35, -0.6), Vec3A::X * 0.8, Vec3A::Z * 0.8, Rgb::new(0.2, 0.5, 2.5), true),
+    ];
+    let scene = floor_and_metal_wall(0.4, lamps);
     let strategy = LightStrategy::build(LightSamplerKind::Cells, &scene.lights, scene.center, scene.radius);
     assert!(matches!(strategy, LightStrategy::EveryAtDiffuse(_)), "{strategy:?}");
     let reference = render_with(&scene, LightSamplerKind::All, 1024, 3, 1);
@@ -274,10 +280,6 @@ fn every_light_at_diffuse_points_agrees_with_all_and_the_tree() {
 /// the tree, and the BSDF rays that meet a lamp are weighed by what chose at their vertex.
 #[test]
 fn cells_over_clusters_agrees_with_the_tree_at_diffuse_and_glossy_points() {
-    let metal = Material { metallic: 1.0, roughness: 0.3, ..Material::diffuse("metal", Rgb::new(0.9, 0.7, 0.5)) };
-    let floor =
-        quad_mesh("floor", Vec3A::new(-2.0, 0.0, 2.0), Vec3A::new(4.0, 0.0, 0.0), Vec3A::new(0.0, 0.0, -4.0), 0);
-    let wall = quad_mesh("wall", Vec3A::new(-2.0, 0.0, -1.0), Vec3A::new(4.0, 0.0, 0.0), Vec3A::new(0.0, 2.0, 0.0), 1);
     let colours = [Rgb::new(3.0, 0.5, 0.2), Rgb::new(0.2, 0.5, 2.5), Rgb::splat(1.5)];
     let lamps: Vec<_> = (0..1200)
         .map(|i| {
@@ -286,14 +288,7 @@ fn cells_over_clusters_agrees_with_the_tree_at_diffuse_and_glossy_points() {
             quad_light(corner, Vec3A::X * 0.08, Vec3A::Z * 0.08, colours[i % 3] * 5.0, i % 5 == 0)
         })
         .collect();
-    let scene = scene_from(
-        vec![Material::diffuse("floor", Rgb::splat(0.7)), metal],
-        vec![(floor, Mat4::IDENTITY), (wall, Mat4::IDENTITY)],
-        lamps,
-        Vec3A::new(0.0, 1.4, 2.4),
-        Vec3A::new(0.0, 0.2, -0.4),
-        UVec2::new(24, 18),
-    );
+    let scene = floor_and_metal_wall(0.3, lamps);
     let strategy = LightStrategy::build(LightSamplerKind::Cells, &scene.lights, scene.center, scene.radius);
     assert_eq!(strategy.label(LightSamplerKind::Cells), "cells");
     let reference = render_with(&scene, LightSamplerKind::Tree, 512, 3, 1);
