@@ -46,6 +46,20 @@ pub struct ThinLens {
     pub focus_distance: f32,
 }
 
+/// Where the camera sees a point ([`Camera::project`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Projection {
+    /// The pixel it falls in.
+    pub pixel: UVec2,
+    /// Unit direction from the point to the camera.
+    pub to_camera: Vec3A,
+    /// Distance from the point to the camera.
+    pub distance: f32,
+    /// The density with which a camera ray, its pixel and jitter uniform over the image,
+    /// leaves towards the point, per unit solid angle (the pinhole's importance).
+    pub importance: f32,
+}
+
 /// A perspective camera.
 #[derive(Clone, Copy, Debug)]
 pub struct Camera {
@@ -222,6 +236,32 @@ impl Camera {
         Ray::new(self.origin, dir)
     }
 
+    /// Where the pinhole camera sees world point `p` on an image of `resolution` (`None`:
+    /// behind it or outside the image): the inverse of [`ray`](Self::ray), for light paths
+    /// that end at the camera.
+    #[inline]
+    pub fn project(&self, p: Vec3A, resolution: UVec2) -> Option<Projection> {
+        let d = p - self.origin;
+        let z = d.dot(self.forward);
+        if !(z > 0.0) {
+            return None;
+        }
+        let res = resolution.as_vec2();
+        let tan = self.tan_half_fovs(res);
+        let s = Vec2::new(d.dot(self.right), d.dot(self.up)) / z - 2.0 * self.tan_half_fov * self.shift;
+        let ndc = Vec2::new(0.5 * (s.x / tan.x + 1.0), 0.5 * (1.0 - s.y / tan.y));
+        if !(ndc.x >= 0.0 && ndc.x < 1.0 && ndc.y >= 0.0 && ndc.y < 1.0) {
+            return None;
+        }
+        let pixel = (ndc * res).as_uvec2().min(resolution - 1);
+        let distance = d.length();
+        let cos = z / distance;
+        // Camera rays cross the plane z = 1 uniformly over the image's 4·tan.x·tan.y: per
+        // unit solid angle that is 1 / (area · cos³θ).
+        let importance = 1.0 / (4.0 * tan.x * tan.y * cos * cos * cos);
+        Some(Projection { pixel, to_camera: -d / distance, distance, importance })
+    }
+
     /// [`ray`](Self::ray) from the point `lens_u ∈ [0,1)²` picks uniformly on the aperture
     /// disk, towards where the pinhole ray meets the focal plane (Cycles' thin lens); the
     /// pinhole ray without a lens.
@@ -272,6 +312,33 @@ mod tests {
         assert!(e.contains("200.5"), "{e}");
         let e = Camera::look_at(Vec3A::splat(f32::INFINITY), Vec3A::X, Vec3A::Y, 0.6).unwrap_err();
         assert!(e.contains("eye"), "{e}");
+    }
+
+    #[test]
+    fn projection_finds_the_pixel_a_ray_came_from_and_its_density_integrates_to_one() {
+        let res = UVec2::new(40, 30);
+        let cam = Camera::look_at(Vec3A::new(0.5, 1.0, 4.0), Vec3A::new(0.0, 1.2, 0.0), Vec3A::Y, 0.9)
+            .unwrap()
+            .with_projection(Fit::Auto, Vec2::new(0.1, -0.05))
+            .unwrap();
+        // Each pixel's ray, followed 3 m, projects back into that pixel.
+        let mut integral = 0.0f64;
+        for y in 0..res.y {
+            for x in 0..res.x {
+                let px = UVec2::new(x, y);
+                let r = cam.ray(px, res, Vec2::splat(0.5));
+                let p = cam.project(r.origin + 3.0 * r.dir, res).expect("in view");
+                assert_eq!(p.pixel, px);
+                assert!((p.to_camera + r.dir).length() < 1e-5 && (p.distance - 3.0).abs() < 1e-4);
+                // Σ density × the pixel's solid angle (its corners' rays) ≈ 1.
+                let corner = |dx: f32, dy: f32| cam.ray(px, res, Vec2::new(dx, dy)).dir;
+                let (a, b, c) = (corner(0.0, 0.0), corner(1.0, 0.0), corner(0.0, 1.0));
+                integral += (p.importance * (b - a).cross(c - a).length()) as f64;
+            }
+        }
+        assert!((integral - 1.0).abs() < 0.01, "{integral}");
+        assert!(cam.project(cam.position() - cam.forward(), res).is_none(), "behind the camera");
+        assert!(cam.project(cam.position() + cam.forward() + 10.0 * Vec3A::X, res).is_none(), "beside the image");
     }
 
     #[test]

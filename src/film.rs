@@ -115,6 +115,29 @@ impl AovSum {
     }
 }
 
+/// Light a light path brought to a pixel ([`Film::splat`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Splat {
+    /// Row-major pixel index.
+    pub pixel: u32,
+    /// What it adds to the pixel's sum of samples.
+    pub value: Rgb,
+}
+
+/// A film's splat sums while workers render: any of them adds its splats, a batch at a time
+/// (integer sums: the order batches arrive in changes no bit).
+pub struct SplatSums<'a>(std::sync::Mutex<&'a mut [PixelSum]>);
+
+impl SplatSums<'_> {
+    /// Adds `batch` and empties it.
+    pub fn add(&self, batch: &mut Vec<Splat>) {
+        let mut sums = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        for s in batch.drain(..) {
+            sums[s.pixel as usize].add(s.value);
+        }
+    }
+}
+
 /// The film of one render.
 #[derive(Clone, Debug)]
 pub struct Film {
@@ -122,13 +145,34 @@ pub struct Film {
     spp: u32,
     pixels: Vec<PixelSum>,
     aovs: Option<Vec<AovSum>>,
+    /// Light paths' contributions per pixel, when the render traces them: added to the
+    /// samples' sums for the mean, their squares to its variance (they are independent of
+    /// the pixel's own samples).
+    splats: Option<Vec<PixelSum>>,
 }
 
 impl Film {
     /// An empty film; `first_hit` keeps AOV sums too.
     pub fn new(size: UVec2, first_hit: bool) -> Self {
         let n = (size.x * size.y) as usize;
-        Self { size, spp: 0, pixels: vec![PixelSum::default(); n], aovs: first_hit.then(|| vec![AovSum::default(); n]) }
+        Self {
+            size,
+            spp: 0,
+            pixels: vec![PixelSum::default(); n],
+            aovs: first_hit.then(|| vec![AovSum::default(); n]),
+            splats: None,
+        }
+    }
+
+    /// The same film keeping the sums of light paths' splats too.
+    pub fn with_splats(self) -> Self {
+        let n = self.pixels.len();
+        Self { splats: Some(self.splats.unwrap_or_else(|| vec![PixelSum::default(); n])), ..self }
+    }
+
+    /// Whether the film keeps light paths' splats.
+    pub fn has_splats(&self) -> bool {
+        self.splats.is_some()
     }
 
     /// Image size.
@@ -146,29 +190,34 @@ impl Film {
         self.spp += n;
     }
 
-    /// Mutable rows `[row0, row0 + rows)` for workers: (pixel sums, AOV sums).
+    /// Mutable rows `[row0, row0 + rows)` for workers: (pixel sums, AOV sums); and the splat
+    /// sums, which any worker may add to (light paths reach any pixel).
+    #[allow(clippy::type_complexity)]
     pub fn bands_mut(
         &mut self,
         rows_per_band: u32,
-    ) -> impl Iterator<Item = (u32, &mut [PixelSum], Option<&mut [AovSum]>)> {
+    ) -> (impl Iterator<Item = (u32, &mut [PixelSum], Option<&mut [AovSum]>)>, Option<SplatSums<'_>>) {
         let w = self.size.x as usize;
         let chunk = w * rows_per_band as usize;
         let aov_chunks: Box<dyn Iterator<Item = Option<&mut [AovSum]>>> = match self.aovs.as_mut() {
             Some(a) => Box::new(a.chunks_mut(chunk).map(Some)),
             None => Box::new(std::iter::repeat_with(|| None)),
         };
-        self.pixels
+        let bands = self
+            .pixels
             .chunks_mut(chunk)
             .zip(aov_chunks)
             .enumerate()
-            .map(move |(i, (p, a))| (i as u32 * rows_per_band, p, a))
+            .map(move |(i, (p, a))| (i as u32 * rows_per_band, p, a));
+        (bands, self.splats.as_deref_mut().map(|s| SplatSums(std::sync::Mutex::new(s))))
     }
 
     /// Mean of pixel `i` (row-major).
     #[inline]
     pub fn mean(&self, i: usize) -> Rgb {
         let n = self.spp.max(1) as f64;
-        let s = self.pixels[i].sum.map(|q| Fixed::to_f64(q, Fixed::VALUE) / n);
+        let splat = self.splats.as_ref().map_or([0; 3], |s| s[i].sum);
+        let s = [0, 1, 2].map(|c| Fixed::to_f64(self.pixels[i].sum[c] + splat[c], Fixed::VALUE) / n);
         Rgb::new(s[0] as f32, s[1] as f32, s[2] as f32)
     }
 
@@ -182,7 +231,8 @@ impl Film {
         let v = |c: usize| {
             let mean = Fixed::to_f64(p.sum[c], Fixed::VALUE) / n;
             let mean_sq = Fixed::to_f64(p.sum_sq[c], Fixed::SQUARE) / n;
-            (((mean_sq - mean * mean) * n / (n - 1.0)).max(0.0) / n) as f32
+            let splats = self.splats.as_ref().map_or(0.0, |s| Fixed::to_f64(s[i].sum_sq[c], Fixed::SQUARE) / (n * n));
+            (((mean_sq - mean * mean) * n / (n - 1.0)).max(0.0) / n + splats) as f32
         };
         Rgb::new(v(0), v(1), v(2))
     }
@@ -204,12 +254,17 @@ impl Film {
                 x.merge(y);
             }
         }
+        if let (Some(a), Some(b)) = (self.splats.as_mut(), other.splats.as_ref()) {
+            for (x, y) in a.iter_mut().zip(b) {
+                x.merge(y);
+            }
+        }
         self.spp += other.spp;
     }
 
-    /// Bytes of [`Film::sums_bytes`] per pixel: with or without first-hit sums.
-    pub fn bytes_per_pixel(first_hit: bool) -> usize {
-        6 * 16 + if first_hit { 7 * 16 } else { 0 }
+    /// Bytes of [`Film::sums_bytes`] per pixel: with or without first-hit sums and splats.
+    pub fn bytes_per_pixel(first_hit: bool, splats: bool) -> usize {
+        6 * 16 + if first_hit { 7 * 16 } else { 0 } + if splats { 6 * 16 } else { 0 }
     }
 
     /// Whether the film keeps first-hit (AOV) sums.
@@ -217,10 +272,11 @@ impl Film {
         self.aovs.is_some()
     }
 
-    /// The sums as bytes (little-endian i128s, pixel by pixel, then the AOV sums): what a
-    /// partial render stores so that a merge is exact.
+    /// The sums as bytes (little-endian i128s, pixel by pixel, then the AOV sums, then the
+    /// splats'): what a partial render stores so that a merge is exact.
     pub fn sums_bytes(&self) -> Vec<u8> {
-        let mut out = Vec::with_capacity(self.pixels.len() * Self::bytes_per_pixel(self.aovs.is_some()));
+        let per_pixel = Self::bytes_per_pixel(self.aovs.is_some(), self.splats.is_some());
+        let mut out = Vec::with_capacity(self.pixels.len() * per_pixel);
         for p in &self.pixels {
             for q in p.sum.iter().chain(&p.sum_sq) {
                 out.extend_from_slice(&q.to_le_bytes());
@@ -231,31 +287,43 @@ impl Film {
                 out.extend_from_slice(&q.to_le_bytes());
             }
         }
+        for p in self.splats.iter().flatten() {
+            for q in p.sum.iter().chain(&p.sum_sq) {
+                out.extend_from_slice(&q.to_le_bytes());
+            }
+        }
         out
     }
 
     /// The film whose [`sums_bytes`](Self::sums_bytes) are `bytes`, of `size` pixels and `spp`
     /// samples; `None` when the length does not fit.
-    pub fn from_sums_bytes(size: UVec2, spp: u32, first_hit: bool, bytes: &[u8]) -> Option<Self> {
+    pub fn from_sums_bytes(size: UVec2, spp: u32, first_hit: bool, splats: bool, bytes: &[u8]) -> Option<Self> {
         let n = size.x as usize * size.y as usize;
-        if bytes.len() != n.checked_mul(Self::bytes_per_pixel(first_hit))? {
+        if bytes.len() != n.checked_mul(Self::bytes_per_pixel(first_hit, splats))? {
             return None;
         }
         let mut words = bytes.chunks_exact(16).map(|b| i128::from_le_bytes(b.try_into().expect("16 bytes")));
         let mut next = || words.next().expect("length checked");
-        let pixels =
-            (0..n).map(|_| PixelSum { sum: [next(), next(), next()], sum_sq: [next(), next(), next()] }).collect();
+        let pixel_sums = |next: &mut dyn FnMut() -> i128| -> Vec<PixelSum> {
+            (0..n).map(|_| PixelSum { sum: [next(), next(), next()], sum_sq: [next(), next(), next()] }).collect()
+        };
+        let pixels = pixel_sums(&mut next);
         let aovs = first_hit.then(|| {
             (0..n)
                 .map(|_| AovSum { albedo: [next(), next(), next()], normal: [next(), next(), next()], depth: next() })
                 .collect()
         });
-        Some(Self { size, spp, pixels, aovs })
+        let splats = splats.then(|| pixel_sums(&mut next));
+        Some(Self { size, spp, pixels, aovs, splats })
     }
 
     /// Whether two films hold the same sums (the same samples, bit for bit).
     pub fn same_sums(&self, other: &Film) -> bool {
-        self.size == other.size && self.spp == other.spp && self.pixels == other.pixels && self.aovs == other.aovs
+        self.size == other.size
+            && self.spp == other.spp
+            && self.pixels == other.pixels
+            && self.aovs == other.aovs
+            && self.splats == other.splats
     }
 
     /// The output channels: R, G, B, then the AOVs asked for.
@@ -292,7 +360,7 @@ mod tests {
     #[test]
     fn mean_and_variance_of_known_samples() {
         let mut film = Film::new(UVec2::new(1, 1), false);
-        for (_, px, _) in film.bands_mut(1) {
+        for (_, px, _) in film.bands_mut(1).0 {
             for v in [1.0f32, 2.0, 3.0, 4.0] {
                 px[0].add(Rgb::splat(v));
             }
@@ -320,7 +388,7 @@ mod tests {
             .collect();
         let film_of = |vals: &[f32]| {
             let mut f = Film::new(UVec2::new(1, 1), true);
-            for (_, px, aov) in f.bands_mut(1) {
+            for (_, px, aov) in f.bands_mut(1).0 {
                 let aov = aov.unwrap();
                 for &v in vals {
                     px[0].add(Rgb::new(v, 2.0 * v, 0.5));
@@ -355,14 +423,14 @@ mod tests {
         let mut b = a.clone();
         let mut whole = a.clone();
         for (film, vals) in [(&mut a, [1.0f32, 2.0]), (&mut b, [5.0, 7.0]), (&mut whole, [1.0, 2.0])] {
-            for (_, px, _) in film.bands_mut(1) {
+            for (_, px, _) in film.bands_mut(1).0 {
                 for v in vals {
                     px[1].add(Rgb::splat(v));
                 }
             }
             film.add_spp(2);
         }
-        for (_, px, _) in whole.bands_mut(1) {
+        for (_, px, _) in whole.bands_mut(1).0 {
             px[1].add(Rgb::splat(5.0));
             px[1].add(Rgb::splat(7.0));
         }

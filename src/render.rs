@@ -15,6 +15,7 @@ use rayon::prelude::*;
 
 use crate::film::{AovSet, Film};
 use crate::guiding::{Guide, GuideStats};
+use crate::integrator::light_paths::LightPaths;
 use crate::integrator::{RayCounters, Tally, path, timing};
 use crate::interrupt::{self, Stop};
 use crate::learning::{Learning, Seen};
@@ -26,6 +27,9 @@ use crate::settings::Clamp;
 
 /// Rows per work item: small enough to balance 2–64 threads on a 240-row image.
 const ROWS_PER_BAND: u32 = 2;
+
+/// Light paths' splats a worker keeps before it adds them to the film (bounds its memory).
+const SPLAT_BATCH: usize = 4096;
 
 /// Longest a fixed-spp pass should take, so that a Ctrl-C (which lets the pass under way
 /// finish) is answered soon.
@@ -170,6 +174,8 @@ pub struct RenderStats {
     /// Whether the user stopped the render ([`Stop::AfterPass`]: the film holds the passes
     /// finished; [`Stop::Now`]: it is incomplete and must not be written).
     pub stopped: Stop,
+    /// The point and spot lights light paths started from (0: no light paths traced).
+    pub light_path_lights: usize,
 }
 
 impl Default for RenderStats {
@@ -184,6 +190,7 @@ impl Default for RenderStats {
             guide: None,
             learned_at: 0,
             stopped: Stop::No,
+            light_path_lights: 0,
         }
     }
 }
@@ -214,6 +221,7 @@ struct Pass<'a> {
     scene: &'a Scene,
     strategy: &'a LightStrategy,
     guide: Option<&'a Guide>,
+    light_paths: Option<&'a LightPaths>,
     settings: &'a RenderSettings,
     first: u32,
     count: u32,
@@ -241,20 +249,21 @@ struct PassTally {
 /// worker, merged), empty when nothing learns.
 fn render_pass(pass: &Pass, film: &mut Film, recording: &Seen, watch: Watch) -> PassTally {
     let called_off = || watch.cancel.is_some_and(|c| c.load(Ordering::Relaxed));
-    let Pass { scene, strategy, guide, settings, first, count } = *pass;
+    let Pass { scene, strategy, guide, light_paths, settings, first, count } = *pass;
     let caustics = scene.caustics && settings.caustics;
-    let tracer =
-        path::Tracer { scene, strategy, guide, max_depth: settings.max_depth, clamp: settings.clamp, caustics };
+    let (max_depth, clamp) = (settings.max_depth, settings.clamp);
+    let tracer = path::Tracer { scene, strategy, guide, max_depth, clamp, caustics, light_paths };
     let size = settings.resolution;
-    let bands: Vec<_> = film.bands_mut(ROWS_PER_BAND).collect();
+    let (bands, splat_sums) = film.bands_mut(ROWS_PER_BAND);
+    let bands: Vec<_> = bands.collect();
     // Each worker sums its bands' counts and records; every sum is of integers, so the
     // totals do not depend on how rayon splits the bands.
-    let empty = || (Tally { seen: recording.empty_like(), ..Tally::default() }, 0u64);
-    let (tally, bad) = bands
+    let empty = || (Tally { seen: recording.empty_like(), ..Tally::default() }, 0u64, Vec::new());
+    let (tally, bad, mut splats) = bands
         .into_par_iter()
-        .fold(empty, |(mut tally, mut bad), (row0, pixels, mut aovs)| {
+        .fold(empty, |(mut tally, mut bad, mut splats), (row0, pixels, mut aovs)| {
             if interrupt::requested() == Stop::Now {
-                return (tally, bad);
+                return (tally, bad, splats);
             }
             for (k, px) in pixels.iter_mut().enumerate() {
                 if called_off() {
@@ -286,14 +295,26 @@ fn render_pass(pass: &Pass, film: &mut Film, recording: &Seen, watch: Watch) -> 
                     if let Some(a) = aovs.as_deref_mut() {
                         a[k].add(smp.first_hit);
                     }
+                    if let (Some(paths), Some(sums)) = (light_paths, &splat_sums) {
+                        splats.extend(paths.trace(scene, strategy, &stream, &mut tally.rays));
+                        if splats.len() >= SPLAT_BATCH {
+                            sums.add(&mut splats);
+                        }
+                    }
                 }
             }
             if let Some(observer) = watch.progress {
                 observer.advance(pixels.len() as u64 * count as u64);
             }
-            (tally, bad)
+            (tally, bad, splats)
         })
-        .reduce(empty, |(a, bad_a), (b, bad_b)| (a.merge(b), bad_a + bad_b));
+        .reduce(empty, |(a, bad_a, mut splats_a), (b, bad_b, splats_b)| {
+            splats_a.extend(splats_b);
+            (a.merge(b), bad_a + bad_b, splats_a)
+        });
+    if let Some(sums) = splat_sums {
+        sums.add(&mut splats);
+    }
     film.add_spp(count);
     PassTally { cancelled: called_off(), rays: tally.rays, non_finite: bad, seen: tally.seen }
 }
@@ -328,6 +349,13 @@ fn next_pass(budget: Budget, done: u32, per_spp: Option<Duration>, elapsed: Dura
     }
 }
 
+/// Whether a render of `settings` traces light paths where the scene has something for them
+/// ([`LightPaths`]): with the caustics switch, and where the path tracer's densities are the
+/// ones they weigh themselves against (no guiding, no clamping, two scattering events).
+fn traces_light_paths(settings: &RenderSettings) -> bool {
+    settings.caustics && !settings.guiding && !settings.clamp.is_on() && settings.max_depth >= 2
+}
+
 /// Renders samples `0..end` into a film that is then dropped: the state `learning` a render
 /// of a sample range starting at `end` needs (see [`crate::learning`]).
 fn train(
@@ -347,6 +375,7 @@ fn train(
             scene,
             strategy: learning.strategy().unwrap_or(strategy),
             guide: learning.guide(),
+            light_paths: None,
             settings,
             first,
             count,
@@ -371,6 +400,7 @@ pub struct Progressive<'a> {
     settings: RenderSettings,
     film: Film,
     learning: Option<Learning>,
+    light_paths: Option<LightPaths>,
     /// Index of the first sample (a sample range's start; 0 otherwise).
     offset: u32,
     rays: RayCounters,
@@ -389,8 +419,10 @@ impl<'a> Progressive<'a> {
             let end = offset.min(l.until());
             rays.add(&train(l, scene, strategy, settings, end));
         }
+        let light_paths = traces_light_paths(settings).then(|| LightPaths::new(scene, settings.resolution)).flatten();
         let film = Film::new(settings.resolution, settings.aovs.wants_first_hit());
-        Self { scene, strategy, settings: *settings, film, learning, offset, rays, non_finite: 0 }
+        let film = if light_paths.is_some() { film.with_splats() } else { film };
+        Self { scene, strategy, settings: *settings, film, learning, light_paths, offset, rays, non_finite: 0 }
     }
 
     /// Adds the next `count` samples of every pixel (fewer when the strategy must learn
@@ -419,7 +451,8 @@ impl<'a> Progressive<'a> {
         let learned = self.learning.as_ref();
         let strategy = learned.and_then(Learning::strategy).unwrap_or(self.strategy);
         let guide = learned.and_then(Learning::guide);
-        let pass = Pass { scene: self.scene, strategy, guide, settings: &self.settings, first, count };
+        let light_paths = self.light_paths.as_ref();
+        let pass = Pass { scene: self.scene, strategy, guide, light_paths, settings: &self.settings, first, count };
         let tally =
             render_pass(&pass, &mut self.film, seen.as_ref().unwrap_or(&Seen::default()), Watch { progress, cancel });
         if tally.cancelled {
@@ -452,6 +485,7 @@ impl<'a> Progressive<'a> {
             guide: self.learning.as_ref().and_then(Learning::guide_stats),
             learned_at: self.learning.as_ref().map_or(0, Learning::learned_at),
             stopped,
+            light_path_lights: self.light_paths.as_ref().map_or(0, LightPaths::lights),
         };
         RenderOutput { film: self.film, stats }
     }

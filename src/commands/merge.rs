@@ -78,7 +78,7 @@ pub fn merge(opts: &MergeOptions) -> Result<MergeReport> {
     let mut header = parts[0].1.clone();
     header.samples = [ranges[0].0, ranges.last().expect("one part at least").1];
     let pixels = header.resolution[0] as u64 * header.resolution[1] as u64;
-    let film_bytes = pixels * Film::bytes_per_pixel(header.aov_set().wants_first_hit()) as u64;
+    let film_bytes = pixels * Film::bytes_per_pixel(header.aov_set().wants_first_hit(), header.light_paths) as u64;
     // The sum so far, the part being read, and the part's file bytes.
     check_memory(3 * film_bytes, "merging these parts").map_err(Error::Usage)?;
     let mut film: Option<Film> = None;

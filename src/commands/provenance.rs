@@ -114,6 +114,7 @@ pub fn part_header(
         clamp: settings.clamp,
         guiding: settings.guiding,
         caustics: settings.caustics,
+        light_paths: stats.light_path_lights > 0,
         resolution: settings.resolution.to_array(),
         aovs: settings.aovs.names(),
         samples: [samples.0, samples.1],

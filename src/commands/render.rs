@@ -320,6 +320,15 @@ impl fmt::Display for RenderReport {
         } else if s.caustics {
             writeln!(f, "caustics   off (--caustics): light through smooth glass left to BSDF sampling")?;
         }
+        if st.light_path_lights > 0 {
+            let (paths, splats) = (st.rays.light_paths, st.rays.splats);
+            writeln!(
+                f,
+                "highlights {paths} light paths from {} point and spot lights, {splats} of them off a glossy surface to the image ({:.1} %)",
+                st.light_path_lights,
+                100.0 * splats as f64 / paths.max(1) as f64
+            )?;
+        }
         if self.sampler == LightSamplerKind::Cells && self.cells.is_none() && !s.lights.is_empty() {
             let lights = self.loaded.scene.lights.len();
             let chose = if lights <= crate::light_sampler::EVERY_LIGHT_UP_TO {

@@ -10,6 +10,7 @@
 //! (`mnee`).
 
 use super::guided::Scattering;
+use super::light_paths::Highlight;
 use super::mnee;
 use super::timing::{Stopwatch, timed};
 use super::{RayCounters, Tally};
@@ -29,16 +30,18 @@ use crate::scene::Scene;
 #[allow(clippy::too_many_arguments)]
 fn light_contribution(
     scene: &Scene,
-    light: &Light,
+    id: u32,
     pmf: f32,
     scattering: &Scattering,
     p: Vec3A,
     medium: Rgb,
     glass: mnee::AtVertex,
+    highlight: Option<&Highlight>,
     u: [u64; 2],
     counters: &mut RayCounters,
     observe: impl FnOnce(f32, bool),
 ) -> Rgb {
+    let light = &scene.lights[id as usize];
     if glass.smooth && light.is_delta() {
         return Rgb::ZERO;
     }
@@ -100,14 +103,19 @@ fn light_contribution(
     if occluded {
         return Rgb::ZERO;
     }
-    let weight = if light.is_delta() { 1.0 } else { power_heuristic(pmf * ls.pdf, scattering.pdf(ls.wi)) };
+    let weight = match highlight {
+        _ if !light.is_delta() => power_heuristic(pmf * ls.pdf, scattering.pdf(ls.wi)),
+        Some(h) => h.weight(scene, id, &ls, pmf),
+        None => 1.0,
+    };
     unshadowed * weight
 }
 
 /// Direct light reflected towards the viewer of `scattering` at surface point `p` (inside a
 /// volume of absorption `medium`, zero outside), estimated with `strategy` and weighed
-/// against the density `scattering` samples directions with; also through smooth glass, as
-/// `glass` allows.
+/// against the density `scattering` samples directions with, and for point and spot lights
+/// against light paths where they sample the same path (`highlight`); also through smooth
+/// glass, as `glass` allows.
 #[inline]
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_direct(
@@ -117,6 +125,7 @@ pub fn estimate_direct(
     p: Vec3A,
     medium: Rgb,
     glass: mnee::AtVertex,
+    highlight: Option<&Highlight>,
     stream: &SampleStream,
     bounce: u32,
     tally: &mut Tally,
@@ -128,9 +137,10 @@ pub fn estimate_direct(
             .lights
             .iter()
             .enumerate()
-            .map(|(i, light)| {
+            .map(|(i, _)| {
                 let u = stream.get_2d_u64(bounce, Dim::LightPoint, i as u32);
-                light_contribution(scene, light, 1.0, scattering, p, medium, glass, u, &mut tally.rays, |_, _| {})
+                let rays = &mut tally.rays;
+                light_contribution(scene, i as u32, 1.0, scattering, p, medium, glass, highlight, u, rays, |_, _| {})
             })
             .fold(Rgb::ZERO, |a, b| a + b),
         Some(sampler) => {
@@ -144,10 +154,10 @@ pub fn estimate_direct(
             match choice {
                 Some(s) => {
                     debug_assert!(s.pmf > 0.0);
-                    let light = &scene.lights[s.light.0 as usize];
                     let Tally { rays, seen, .. } = tally;
                     let observe = |c, visible| seen.record_light_sample(strategy, &ctx, s.light, c, visible);
-                    light_contribution(scene, light, s.pmf, scattering, p, medium, glass, u_point, rays, observe)
+                    let (id, pmf) = (s.light.0, s.pmf);
+                    light_contribution(scene, id, pmf, scattering, p, medium, glass, highlight, u_point, rays, observe)
                 }
                 None => Rgb::ZERO,
             }

@@ -8,6 +8,7 @@
 
 pub mod direct;
 pub mod guided;
+pub mod light_paths;
 pub mod mnee;
 pub mod path;
 pub mod timing;
@@ -49,6 +50,10 @@ pub struct RayCounters {
     pub glass_tried: u64,
     /// Those of them it brought light along.
     pub glass_solved: u64,
+    /// Light paths traced ([`light_paths`]).
+    pub light_paths: u64,
+    /// Those of them that brought light to the image.
+    pub splats: u64,
     /// Ticks per phase of the timed paths.
     pub time: timing::PhaseTimes,
     /// Whether the path being traced is timed ([`timing::is_timed`]).
@@ -71,6 +76,8 @@ impl RayCounters {
         self.shadow_rays += other.shadow_rays;
         self.glass_tried += other.glass_tried;
         self.glass_solved += other.glass_solved;
+        self.light_paths += other.light_paths;
+        self.splats += other.splats;
         self.time.add(&other.time);
     }
 

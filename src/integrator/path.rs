@@ -9,6 +9,7 @@
 
 use super::direct::estimate_direct;
 use super::guided::Scattering;
+use super::light_paths::{CameraVertex, Highlight, LightPaths, Surface};
 use super::mnee::{AtVertex, GlassChain, MAX_CASTERS};
 use super::timing::{Stopwatch, timed};
 use super::transmittance;
@@ -210,6 +211,29 @@ fn emitted(
     beta * le * weight
 }
 
+/// The shading normal (normal-mapped) and tangent (anisotropic BSDFs) of `material` at `hit`.
+#[inline]
+pub(super) fn shading_normals(
+    scene: &Scene,
+    material: &crate::material::Material,
+    hit: &SurfaceHit,
+) -> (Vec3A, Option<Vec3A>) {
+    let n_shading = material.mapped_normal(
+        hit.n_shading,
+        || scene.geometry.position_derivatives(hit.triangle),
+        hit.uv,
+        &scene.images,
+    );
+    let tangent = material.tangent(
+        n_shading,
+        || scene.geometry.tangent_at(hit.triangle, hit.p),
+        || scene.geometry.position_derivatives(hit.triangle),
+        hit.uv,
+        &scene.images,
+    );
+    (n_shading, tangent)
+}
+
 /// Russian roulette from [`RR_MIN_DEPTH`] on: a path survives with probability
 /// min(1, max(beta)^¼) and carries `beta` divided by it; false when it ends. The fourth root
 /// ends dim paths less eagerly than Cycles' square root (or max(beta)) would: in closed
@@ -258,12 +282,16 @@ pub struct Tracer<'a> {
     /// Whether light through smooth glass is solved for (the scene has some to solve for
     /// and the render asks for it).
     pub caustics: bool,
+    /// The light paths each camera sample also traces, when the render traces them (what
+    /// next-event estimation of point and spot lights at glossy second vertices is weighed
+    /// against).
+    pub light_paths: Option<&'a LightPaths>,
 }
 
 impl Tracer<'_> {
     /// Radiance arriving along `ray` (a camera ray).
     pub fn radiance(&self, mut ray: Ray, stream: &SampleStream, tally: &mut Tally) -> PathSample {
-        let Tracer { scene, strategy, guide, max_depth, clamp, caustics } = *self;
+        let Tracer { scene, strategy, guide, max_depth, clamp, caustics, light_paths } = *self;
         let mut l = Rgb::ZERO;
         let mut first_hit = None;
         let mut beta = Rgb::ONE;
@@ -273,6 +301,8 @@ impl Tracer<'_> {
         let mut medium = Rgb::ZERO;
         // The refractions through smooth glass since the path last left a receiver.
         let mut chain = GlassChain::default();
+        // The camera hit as light paths see it (where they may reach it).
+        let mut x1: Option<CameraVertex> = None;
         // Whether path guiding learns from this path's vertices (`tally.trail`).
         let recording = tally.seen.guide_records().is_some();
         let mut depth = 0u32;
@@ -309,21 +339,23 @@ impl Tracer<'_> {
             let as_smooth = glass.is_some() && chain.from_receiver();
             let entering = ray.dir.dot(hit.n_geom) < 0.0;
             let Some(bsdf) = material.bsdf(hit.uv, &scene.images, entering, as_smooth) else { break };
-            let n_shading = material.mapped_normal(
-                hit.n_shading,
-                || scene.geometry.position_derivatives(hit.triangle),
-                hit.uv,
-                &scene.images,
-            );
-            let tangent = material.tangent(
-                n_shading,
-                || scene.geometry.tangent_at(hit.triangle, hit.p),
-                || scene.geometry.position_derivatives(hit.triangle),
-                hit.uv,
-                &scene.images,
-            );
+            let (n_shading, tangent) = shading_normals(scene, material, &hit);
             let sp = ShadingPoint::new(bsdf, hit.n_geom, n_shading, tangent, wo);
             let scattering = Scattering::new(sp, hit.p, guide);
+            // Light paths sample camera → x1 → glossy x2 → point or spot light too.
+            let highlight = light_paths.and_then(|paths| {
+                let surface = Surface { bsdf, n_geom: hit.n_geom, n_shading, tangent };
+                match (depth, x1, prev) {
+                    (0, ..) => {
+                        x1 = paths.camera_vertex(scene, &hit, &surface);
+                        None
+                    }
+                    (1, Some(x1), Some(prev)) if surface.can_be_x2() => {
+                        Some(Highlight { paths, x1, pdf_x1: prev.bsdf_pdf, surface, wo })
+                    }
+                    _ => None,
+                }
+            });
             // Where next-event estimation also looks through smooth glass: off it, outside it.
             let receiver = caustics && glass.is_none() && medium == Rgb::ZERO;
 
@@ -333,8 +365,9 @@ impl Tracer<'_> {
                     refractions: if receiver { MAX_CASTERS.min((max_depth - depth - 1) as usize) } else { 0 },
                     smooth: as_smooth,
                 };
-                let direct =
-                    beta * estimate_direct(scene, strategy, &scattering, hit.p, medium, at, stream, depth, tally);
+                let highlight = highlight.as_ref();
+                let direct = beta
+                    * estimate_direct(scene, strategy, &scattering, hit.p, medium, at, highlight, stream, depth, tally);
                 l += clamped(direct, clamp.limit(depth >= 1));
             }
 

@@ -51,6 +51,10 @@ pub struct PartHeader {
     /// turned off).
     #[serde(default = "on")]
     pub caustics: bool,
+    /// Whether light paths to the camera were traced (the film then holds their splats;
+    /// off in parts written before myriad traced them).
+    #[serde(default)]
+    pub light_paths: bool,
     /// Image size.
     pub resolution: [u32; 2],
     /// AOV names kept (albedo, normal, depth, variance).
@@ -142,7 +146,8 @@ pub fn read_header(path: &Path) -> Result<PartHeader> {
 
 /// Bytes of sums a part of this header holds (`None` beyond what a u64 counts).
 fn sums_len(h: &PartHeader) -> Option<u64> {
-    (h.resolution[0] as u64 * h.resolution[1] as u64).checked_mul(Film::bytes_per_pixel(h.first_hit()) as u64)
+    (h.resolution[0] as u64 * h.resolution[1] as u64)
+        .checked_mul(Film::bytes_per_pixel(h.first_hit(), h.light_paths) as u64)
 }
 
 /// Reads a part file: its header and its film.
@@ -153,7 +158,7 @@ pub fn read(path: &Path) -> Result<(PartHeader, Film)> {
     let size = UVec2::new(header.resolution[0], header.resolution[1]);
     let spp = header.samples[1] - header.samples[0];
     let film = sums
-        .and_then(|sums| Film::from_sums_bytes(size, spp, header.first_hit(), sums))
+        .and_then(|sums| Film::from_sums_bytes(size, spp, header.first_hit(), header.light_paths, sums))
         .ok_or_else(|| bad(path, "it changed while it was read".into()))?;
     Ok((header, film))
 }

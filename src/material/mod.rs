@@ -342,6 +342,11 @@ impl Material {
     }
 
     /// True when it reflects as Lambert's BSDF alone (whatever its textures say).
+    /// Whether its BSDF can be other than Lambert's somewhere (glossy or transmitting).
+    pub fn may_be_glossy(&self) -> bool {
+        !(self.metallic == 0.0 && self.is_lambertian())
+    }
+
     fn is_lambertian(&self) -> bool {
         self.metallic == 0.0
             && self.specular == 0.0

@@ -29,6 +29,10 @@ pub enum Dim {
     GuideChoice = 10,
     /// Direction drawn from the guide's distribution (2D).
     GuideDirection = 11,
+    /// The light a camera sample's light path starts from (bounce 0 only).
+    LightPathLight = 12,
+    /// The direction it leaves that light in (2D; bounce 0 only).
+    LightPathDirection = 13,
 }
 
 impl Dim {

@@ -14,6 +14,7 @@ mod formats;
 mod gltf_accessors;
 mod gltf_variants;
 mod guiding;
+mod highlights;
 mod lamps;
 mod light_points;
 mod light_samplers;

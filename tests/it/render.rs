@@ -238,7 +238,7 @@ fn samplers_agree_on_cornell_9x9() {
 
 /// A diffuse floor and a glossy metal wall of roughness `roughness` behind it, seen from
 /// above at 24 × 18, lit by `lamps`: paths meet both kinds of vertex.
-fn floor_and_metal_wall(roughness: f32, lamps: Vec<LightDesc>) -> TestScene {
+pub fn floor_and_metal_wall(roughness: f32, lamps: Vec<LightDesc>) -> TestScene {
     let metal = Material { metallic: 1.0, roughness, ..Material::diffuse("metal", Rgb::new(0.9, 0.7, 0.5)) };
     let floor =
         quad_mesh("floor", Vec3A::new(-2.0, 0.0, 2.0), Vec3A::new(4.0, 0.0, 0.0), Vec3A::new(0.0, 0.0, -4.0), 0);

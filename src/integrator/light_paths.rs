@@ -1,0 +1,338 @@
+//! Light paths to the camera for the highlights of point and spot lights on glossy surfaces.
+//!
+//! A path camera → x1 → x2 → point light, where x2 is glossy and mirrors the light towards
+//! x1, is the path tracer's worst case: BSDF sampling at x1 must happen to reach the small
+//! part of x2 whose lobe holds the light, and next-event estimation there then returns a
+//! value thousands of times the pixel's (lobby.glb's floor and metal balls, materials.glb's
+//! copper ball: the fireflies that decide their error). Traced from the light the same path
+//! is easy (BDPT's light tracing, t = 1): a direction from the light, the glossy lobe at x2
+//! sampled towards x1 (so its peak cancels), x1 joined to the camera. Every camera sample
+//! also traces one such light path (its numbers are the sample's: [`Dim::LightPathLight`],
+//! [`Dim::LightPathDirection`], the BSDF's dimensions at sub-index 1), and adds what it
+//! brings to the pixel where x1 is seen, as a splat.
+//!
+//! Both strategies sample the same paths (x1 seen by the pinhole camera, reflecting;
+//! x2 glossy, reflecting; a point or spot light), so each is weighed by the power heuristic
+//! against the other, with the densities both compute from one function ([`mis_ratio`]):
+//! the camera's density over the whole image (one light path per camera sample: the two
+//! counts are equal) × BSDF sampling at x1 × the light's choice at x2, against the light's
+//! choice × its direction × BSDF sampling at x2. Every other path is the path tracer's alone.
+//! Off with a lens (depth of field), guiding or clamping, where the path tracer's densities
+//! are not the ones written here.
+
+use super::RayCounters;
+use super::path::shading_normals;
+use crate::camera::Projection;
+use crate::film::Splat;
+use crate::geometry::{Ray, SurfaceHit};
+use crate::light::{Light, LightId, LightSample};
+use crate::light_sampler::{LightStrategy, ShadingContext};
+use crate::material::{Bsdf, ShadingPoint};
+use crate::math::{Rgb, UVec2, Vec3A, warp};
+use crate::sampling::{Dim, SampleStream};
+use crate::scene::Scene;
+
+/// The point and spot lights light paths start from, chosen by power.
+#[derive(Clone, Debug)]
+pub struct LightPaths {
+    /// Their indices in the scene's lights, ascending.
+    ids: Vec<u32>,
+    /// Cumulative probabilities (the last is 1).
+    cdf: Vec<f32>,
+    /// The image light paths end on.
+    resolution: UVec2,
+}
+
+/// Where the camera sees x1, the first vertex of a path, as both strategies need it.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraVertex {
+    /// Its geometric normal.
+    pub n_geom: Vec3A,
+    /// The camera's density of reaching it, per unit area (over the whole image).
+    pub importance: f32,
+}
+
+/// A glossy x2 whose next-event estimation of a point or spot light light paths also
+/// sample: what its MIS weight needs.
+#[derive(Clone, Copy, Debug)]
+pub struct Highlight<'a> {
+    /// The light paths.
+    pub paths: &'a LightPaths,
+    /// The path's first vertex.
+    pub x1: CameraVertex,
+    /// The density with which BSDF sampling at x1 chose the way to x2.
+    pub pdf_x1: f32,
+    /// The BSDF at x2 and its frame.
+    pub surface: Surface,
+    /// Unit direction from x2 back to x1.
+    pub wo: Vec3A,
+}
+
+/// A BSDF on a surface point before it is seen from any direction.
+#[derive(Clone, Copy, Debug)]
+pub struct Surface {
+    /// The BSDF.
+    pub bsdf: Bsdf,
+    /// Geometric normal (as hit).
+    pub n_geom: Vec3A,
+    /// Shading normal (normal-mapped).
+    pub n_shading: Vec3A,
+    /// Tangent of anisotropic BSDFs.
+    pub tangent: Option<Vec3A>,
+}
+
+impl Surface {
+    /// The BSDF seen from `wo`.
+    #[inline]
+    pub fn seen_from(&self, wo: Vec3A) -> ShadingPoint {
+        ShadingPoint::new(self.bsdf, self.n_geom, self.n_shading, self.tangent, wo)
+    }
+
+    /// Whether a path camera → x1 → x2 → light with this surface as x1 is one light paths
+    /// sample (it reflects, and is not smooth glass's).
+    #[inline]
+    pub fn can_be_x1(&self) -> bool {
+        !self.bsdf.transmits()
+    }
+
+    /// Whether it can be their x2: reflecting and glossy.
+    #[inline]
+    pub fn can_be_x2(&self) -> bool {
+        !self.bsdf.transmits() && !matches!(self.bsdf, Bsdf::Diffuse(_))
+    }
+}
+
+/// The densities of one path camera → x1 → x2 → light under the two strategies, as their
+/// ratio light paths ÷ path tracer.
+#[derive(Clone, Copy, Debug)]
+struct Densities {
+    /// The light's probability among the light paths' lights.
+    light_pmf: f32,
+    /// The light's density of emitting towards x2, per solid angle.
+    emit_pdf: f32,
+    /// |cos| at x2 of the way from the light, and the squared distance.
+    cos_x2_light: f32,
+    dist2_light: f32,
+    /// BSDF sampling's density at x2 of the way to x1 (seen from the light).
+    pdf_x2: f32,
+    /// |cos| at x1 of the way to x2.
+    cos_x1: f32,
+    /// The camera's density at x1 per unit area.
+    importance: f32,
+    /// BSDF sampling's density at x1 of the way to x2 (seen from the camera).
+    pdf_x1: f32,
+    /// |cos| at x2 of the way to x1.
+    cos_x2_x1: f32,
+    /// The probability with which next-event estimation at x2 chose the light.
+    selection_pmf: f32,
+}
+
+impl Densities {
+    /// Light paths' density over the path tracer's (both per unit area at x1 and x2; the
+    /// distance x1–x2 cancels). Infinite where only light paths sample the path.
+    #[inline]
+    fn ratio(&self) -> f32 {
+        let light = self.light_pmf * self.emit_pdf * self.cos_x2_light / self.dist2_light * self.pdf_x2 * self.cos_x1;
+        let camera = self.importance * self.pdf_x1 * self.cos_x2_x1 * self.selection_pmf;
+        light / camera
+    }
+}
+
+/// The power heuristic's weight of the path tracer for a ratio `r` of densities.
+#[inline]
+fn path_tracer_weight(r: f32) -> f32 {
+    if r.is_finite() { 1.0 / (1.0 + r * r) } else { 0.0 }
+}
+
+/// The density with which `light` emits towards unit direction `dir` in a light path.
+#[inline]
+fn emit_pdf(light: &Light, dir: Vec3A) -> f32 {
+    match light {
+        Light::Point(_) => warp::uniform_cone_pdf(2.0),
+        Light::Spot(s) if s.direction.dot(dir) >= s.cos_outer => warp::uniform_cone_pdf(1.0 - s.cos_outer),
+        _ => 0.0,
+    }
+}
+
+impl LightPaths {
+    /// Light paths for `scene` rendered at `resolution`, or `None` where there is nothing
+    /// for them: no point or spot light, no glossy material, or a lens.
+    pub fn new(scene: &Scene, resolution: UVec2) -> Option<Self> {
+        let glossy = scene.materials.iter().any(|m| m.may_be_glossy());
+        if !glossy || scene.camera.has_lens() {
+            return None;
+        }
+        let (ids, powers): (Vec<u32>, Vec<f64>) = scene
+            .lights
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| matches!(l, Light::Point(_) | Light::Spot(_)))
+            .map(|(i, l)| (i as u32, l.power(scene.radius) as f64))
+            .filter(|(_, p)| *p > 0.0)
+            .unzip();
+        let total: f64 = powers.iter().sum();
+        if ids.is_empty() || !(total > 0.0 && total.is_finite()) {
+            return None;
+        }
+        let mut running = 0.0;
+        let mut cdf: Vec<f32> = powers
+            .iter()
+            .map(|p| {
+                running += p;
+                (running / total) as f32
+            })
+            .collect();
+        *cdf.last_mut().expect("one light at least") = 1.0;
+        Some(Self { ids, cdf, resolution })
+    }
+
+    /// How many lights they start from.
+    pub fn lights(&self) -> usize {
+        self.ids.len()
+    }
+
+    /// The probability of light `id` (0 for lights they do not start from).
+    #[inline]
+    fn pmf_of(&self, id: u32) -> f32 {
+        match self.ids.binary_search(&id) {
+            Ok(k) => self.cdf[k] - if k > 0 { self.cdf[k - 1] } else { 0.0 },
+            Err(_) => 0.0,
+        }
+    }
+
+    /// The light for `u ∈ [0,1)` and its probability.
+    #[inline]
+    fn choose(&self, u: f32) -> (u32, f32) {
+        let k = self.cdf.partition_point(|&c| c <= u).min(self.ids.len() - 1);
+        (self.ids[k], self.cdf[k] - if k > 0 { self.cdf[k - 1] } else { 0.0 })
+    }
+
+    /// Where the camera sees `p` on a surface of normal `n_geom`, and its density there.
+    #[inline]
+    fn projection(&self, scene: &Scene, p: Vec3A, n_geom: Vec3A) -> Option<(Projection, CameraVertex)> {
+        let proj = scene.camera.project(p, self.resolution)?;
+        let importance = proj.importance * n_geom.dot(proj.to_camera).abs() / (proj.distance * proj.distance);
+        Some((proj, CameraVertex { n_geom, importance }))
+    }
+
+    /// The first vertex of a camera path as light paths see it (`None` where they cannot
+    /// reach it: outside the image, or where it transmits).
+    #[inline]
+    pub fn camera_vertex(&self, scene: &Scene, hit: &SurfaceHit, surface: &Surface) -> Option<CameraVertex> {
+        surface.can_be_x1().then(|| self.projection(scene, hit.p, hit.n_geom).map(|(_, v)| v)).flatten()
+    }
+
+    /// Traces the light path of one camera sample and returns what it adds to the image,
+    /// weighted against the path tracer (per sample of the whole image: a pixel's mean adds
+    /// its splats' sum over its samples per pixel).
+    pub fn trace(
+        &self,
+        scene: &Scene,
+        strategy: &LightStrategy,
+        stream: &SampleStream,
+        counters: &mut RayCounters,
+    ) -> Option<Splat> {
+        counters.light_paths += 1;
+        let (id, light_pmf) = self.choose(stream.get_1d(0, Dim::LightPathLight, 0));
+        let light = &scene.lights[id as usize];
+        let u = stream.get_2d(0, Dim::LightPathDirection, 0);
+        let (origin, dir) = match light {
+            Light::Point(l) => (l.position, warp::square_to_uniform_sphere(u)),
+            Light::Spot(s) => {
+                let local = warp::square_to_uniform_cone(u, 1.0 - s.cos_outer);
+                (s.position, crate::math::frame::Frame::from_normal(s.direction).to_world(local))
+            }
+            _ => unreachable!("light paths start from point and spot lights"),
+        };
+        // x2: a glossy surface the light reaches.
+        counters.rays += 1;
+        let hit2 = scene.intersect(&Ray::new(origin, dir), f32::INFINITY)?;
+        let x2 = surface_at(scene, &hit2, dir)?;
+        if !x2.can_be_x2() {
+            return None;
+        }
+        let from_light = x2.seen_from(-dir);
+        let u_lobe = if from_light.chooses_lobes() { stream.get_1d(0, Dim::BsdfLobe, 1) } else { 0.0 };
+        let bs = from_light.sample(u_lobe, stream.get_2d(0, Dim::BsdfDirection, 1))?;
+        // x1: where the lobe sends the light, seen by the camera.
+        counters.rays += 1;
+        let hit1 = scene.intersect(&Ray::new(from_light.ray_origin(hit2.p, bs.wi), bs.wi), f32::INFINITY)?;
+        let (proj, cam) = self.projection(scene, hit1.p, hit1.n_geom)?;
+        let x1 = surface_at(scene, &hit1, -proj.to_camera)?;
+        if !x1.can_be_x1() {
+            return None;
+        }
+        let at_x1 = x1.seen_from(proj.to_camera);
+        let f1 = at_x1.eval_cos(-bs.wi);
+        let at_x2 = x2.seen_from(bs.wi);
+        let ls = light.sample_li(hit2.p, [0, 0], &scene.images)?;
+        let f2 = at_x2.eval_cos(ls.wi);
+        if f1 == Rgb::ZERO || f2 == Rgb::ZERO {
+            return None;
+        }
+        counters.shadow_rays += 1;
+        let start = at_x1.ray_origin(hit1.p, proj.to_camera);
+        if scene.occluded(&Ray::new(start, scene.camera.position() - start), 1.0) {
+            return None;
+        }
+        let ctx = ShadingContext { p: hit2.p, n: at_x2.selection_normal() };
+        let densities = Densities {
+            light_pmf,
+            emit_pdf: emit_pdf(light, dir),
+            cos_x2_light: hit2.n_geom.dot(dir).abs(),
+            dist2_light: ls.distance * ls.distance,
+            pdf_x2: bs.pdf,
+            cos_x1: hit1.n_geom.dot(bs.wi).abs(),
+            importance: cam.importance,
+            pdf_x1: at_x1.pdf(-bs.wi),
+            cos_x2_x1: hit2.n_geom.dot(bs.wi).abs(),
+            selection_pmf: strategy.selection_pmf(&ctx, LightId(id), false),
+        };
+        let intensity = ls.radiance * densities.dist2_light;
+        let value = f1 * f2 * intensity * (cam.importance * densities.cos_x2_x1)
+            / (light_pmf * densities.emit_pdf * densities.cos_x2_light * bs.pdf * densities.cos_x1);
+        let weight = 1.0 - path_tracer_weight(densities.ratio());
+        let value = value * weight;
+        if !(value.is_finite() && value.max_element() > 0.0) {
+            return None;
+        }
+        counters.splats += 1;
+        Some(Splat { pixel: proj.pixel.y * self.resolution.x + proj.pixel.x, value })
+    }
+}
+
+impl Highlight<'_> {
+    /// The path tracer's MIS weight for next-event estimation at this x2 of light `id` (its
+    /// sample `ls`, chosen with probability `selection_pmf`): 1 unless light paths start from it.
+    #[inline]
+    pub fn weight(&self, scene: &Scene, id: u32, ls: &LightSample, selection_pmf: f32) -> f32 {
+        let light_pmf = self.paths.pmf_of(id);
+        if light_pmf == 0.0 {
+            return 1.0;
+        }
+        let light = &scene.lights[id as usize];
+        let from_light = self.surface.seen_from(ls.wi);
+        let densities = Densities {
+            light_pmf,
+            emit_pdf: emit_pdf(light, -ls.wi),
+            cos_x2_light: self.surface.n_geom.dot(ls.wi).abs(),
+            dist2_light: ls.distance * ls.distance,
+            pdf_x2: from_light.pdf(self.wo),
+            cos_x1: self.x1.n_geom.dot(self.wo).abs(),
+            importance: self.x1.importance,
+            pdf_x1: self.pdf_x1,
+            cos_x2_x1: self.surface.n_geom.dot(self.wo).abs(),
+            selection_pmf,
+        };
+        path_tracer_weight(densities.ratio())
+    }
+}
+
+/// The BSDF at `hit`, reached along `dir`, as the path tracer would shade it there.
+#[inline]
+fn surface_at(scene: &Scene, hit: &SurfaceHit, dir: Vec3A) -> Option<Surface> {
+    let material = &scene.materials[hit.material as usize];
+    let bsdf = material.bsdf(hit.uv, &scene.images, dir.dot(hit.n_geom) < 0.0, false)?;
+    let (n_shading, tangent) = shading_normals(scene, material, hit);
+    Some(Surface { bsdf, n_geom: hit.n_geom, n_shading, tangent })
+}
