@@ -341,12 +341,13 @@ impl Material {
         })
     }
 
-    /// True when it reflects as Lambert's BSDF alone (whatever its textures say).
-    /// Whether its BSDF can be other than Lambert's somewhere (glossy or transmitting).
-    pub fn may_be_glossy(&self) -> bool {
-        !(self.metallic == 0.0 && self.is_lambertian())
+    /// Whether its BSDF may reflect other than as Lambert's somewhere, and transmits nowhere
+    /// (where light paths may start a highlight: `integrator::light_paths`).
+    pub fn may_reflect_glossily(&self) -> bool {
+        !(self.metallic == 0.0 && self.is_lambertian()) && self.transmission == 0.0
     }
 
+    /// True when it reflects as Lambert's BSDF alone (whatever its textures say).
     fn is_lambertian(&self) -> bool {
         self.metallic == 0.0
             && self.specular == 0.0

@@ -65,6 +65,41 @@ pub fn square_to_uniform_sphere(u: Vec2) -> Vec3A {
 /// Density of [`square_to_uniform_sphere`] in solid angle.
 pub const UNIFORM_SPHERE_PDF: f32 = 0.25 * FRAC_1_PI;
 
+/// The unit square onto the unit sphere, equal areas to equal solid angles (Clarberg 2008,
+/// "Fast Equal-Area Mapping of the (Hemi)Sphere using SIMD": the square folded as an
+/// octahedron, +Z at its centre, −Z at its corners): a grid of R × R cells on the square is a
+/// grid of directions of 4π/R² sr each.
+#[inline]
+pub fn square_to_sphere_equal_area(p: Vec2) -> Vec3A {
+    let (u, v) = (2.0 * p.x - 1.0, 2.0 * p.y - 1.0);
+    // Distance from the diamond |u| + |v| = 1, which is the equator.
+    let signed = 1.0 - (u.abs() + v.abs());
+    let r = 1.0 - signed.abs();
+    let phi = if r == 0.0 { 0.25 * PI } else { ((v.abs() - u.abs()) / r + 1.0) * 0.25 * PI };
+    let z = (1.0 - r * r).copysign(signed);
+    let s = r * (2.0 - r * r).max(0.0).sqrt();
+    Vec3A::new(phi.cos().copysign(u) * s, phi.sin().copysign(v) * s, z)
+}
+
+/// The inverse of [`square_to_sphere_equal_area`]: where on the unit square unit direction
+/// `d` lies.
+#[inline]
+pub fn sphere_to_square_equal_area(d: Vec3A) -> Vec2 {
+    let (x, y) = (d.x.abs(), d.y.abs());
+    let r = (1.0 - d.z.abs()).max(0.0).sqrt();
+    let (a, b) = (x.max(y), x.min(y));
+    let ratio = if a == 0.0 { 0.0 } else { b / a };
+    let mut phi = ratio.atan() * 2.0 * FRAC_1_PI;
+    if x < y {
+        phi = 1.0 - phi;
+    }
+    let (mut u, mut v) = (r - phi * r, phi * r);
+    if d.z < 0.0 {
+        (u, v) = (1.0 - v, 1.0 - u);
+    }
+    Vec2::new(0.5 * (u.copysign(d.x) + 1.0), 0.5 * (v.copysign(d.y) + 1.0))
+}
+
 /// Uniform direction in the cone about +Z of half-angle α, given `1 − cos α` (> 0; passed as
 /// such so that narrow cones keep their precision); density [`uniform_cone_pdf`].
 #[inline]
@@ -179,6 +214,36 @@ mod tests {
         }
         for h in hist {
             assert_eq!(h, n * n / 4);
+        }
+    }
+
+    #[test]
+    fn equal_area_sphere_map_is_uniform_continuous_and_inverts() {
+        let n = 128;
+        let mut hist = [0usize; 4];
+        let mut octants = [0usize; 8];
+        for u in grid(n) {
+            let d = square_to_sphere_equal_area(u);
+            assert!((d.length() - 1.0).abs() < 1e-5, "{u} → {d}");
+            let back = sphere_to_square_equal_area(d);
+            assert!((back - u).abs().max_element() < 1e-4, "{u} → {d} → {back}");
+            hist[(((d.z + 1.0) * 2.0) as usize).min(3)] += 1;
+            octants[(d.x > 0.0) as usize + 2 * (d.y > 0.0) as usize + 4 * (d.z > 0.0) as usize] += 1;
+        }
+        // Uniform on the sphere: z is uniform, and each octant holds an eighth.
+        for h in hist {
+            assert!((h as f64 / (n * n) as f64 - 0.25).abs() < 0.015, "{hist:?}");
+        }
+        // (cell centres on the equator count as below it).
+        assert!(octants.iter().all(|&o| (o as f64 / (n * n / 8) as f64 - 1.0).abs() < 0.04), "{octants:?}");
+        // The poles and the equator's corners.
+        assert!((square_to_sphere_equal_area(Vec2::splat(0.5)) - Vec3A::Z).length() < 1e-6);
+        assert!((square_to_sphere_equal_area(Vec2::ZERO) + Vec3A::Z).length() < 1e-6);
+        assert!((square_to_sphere_equal_area(Vec2::new(1.0, 0.5)) - Vec3A::X).length() < 1e-6);
+        // Neighbours on the square stay neighbours on the sphere.
+        for u in grid(64) {
+            let step = square_to_sphere_equal_area(u + Vec2::new(1e-3, 0.0)) - square_to_sphere_equal_area(u);
+            assert!(step.length() < 0.02, "{u}");
         }
     }
 
