@@ -32,9 +32,9 @@ use crate::light::{Light, LightId, LightSample};
 use crate::light_sampler::{LightStrategy, ShadingContext};
 use crate::material::{Bsdf, ShadingPoint};
 use crate::math::{Rgb, UVec2, Vec3A};
-use emission::Directions;
 use crate::sampling::{Dim, SampleStream};
 use crate::scene::Scene;
+use emission::Directions;
 
 /// The point and spot lights light paths start from, chosen by the power they send at
 /// surfaces that may be glossy, and the directions they leave them in ([`emission`]).
@@ -139,7 +139,8 @@ impl Densities {
     /// distance x1–x2 cancels). Infinite where only light paths sample the path.
     #[inline]
     fn ratio(&self) -> f32 {
-        let light = RATE * self.light_pmf * self.emit_pdf * self.cos_x2_light / self.dist2_light * self.pdf_x2 * self.cos_x1;
+        let light =
+            RATE * self.light_pmf * self.emit_pdf * self.cos_x2_light / self.dist2_light * self.pdf_x2 * self.cos_x1;
         let camera = self.importance * self.pdf_x1 * self.cos_x2_x1 * self.selection_pmf;
         light / camera
     }
