@@ -220,7 +220,8 @@ struct SlurmArgs {
     /// Path guiding: on or off.
     #[arg(long, value_parser = parse_on_off)]
     guiding: Option<bool>,
-    /// Light through smooth glass solved for: on or off.
+    /// Caustics (light through smooth glass, point and spot lights' highlights off glossy
+    /// surfaces) solved for: on or off.
     #[arg(long, value_parser = parse_on_off)]
     caustics: Option<bool>,
     /// Output size, e.g. 640x480.
@@ -368,10 +369,12 @@ struct CommonArgs {
     /// often) or off [default: the scene's, else off].
     #[arg(long, value_parser = parse_on_off)]
     guiding: Option<bool>,
-    /// Light through smooth glass (a lamp in a glass globe, the sun through a glass ball):
-    /// on (next-event estimation solves for the refractions, at some cost per sample where
-    /// it must) or off (left to BSDF sampling, which finds such light by luck and a point
-    /// light's or the sun's never) [default: the scene's, else on].
+    /// Caustics: light through smooth glass (a lamp in a glass globe, the sun through a glass
+    /// ball) and the highlights glossy surfaces throw from point and spot lights. On:
+    /// next-event estimation solves for the refractions, and light paths traced from the
+    /// lights bring the highlights, at some cost per sample; off: both left to BSDF sampling,
+    /// which finds them by luck (a point light's or the sun's through glass never) [default:
+    /// the scene's, else on].
     #[arg(long, value_parser = parse_on_off)]
     caustics: Option<bool>,
     /// Camera to use, by name (default: the scene's first); `auto` frames the whole scene

@@ -71,8 +71,9 @@ pub struct RenderSettings {
     pub clamp: Clamp,
     /// Whether paths are guided by what earlier passes learned ([`crate::guiding`]).
     pub guiding: bool,
-    /// Whether light through smooth glass is solved for where the scene has any
-    /// ([`crate::integrator::mnee`]).
+    /// Whether caustics are solved for where the scene has any: light through smooth glass
+    /// ([`crate::integrator::mnee`]) and point and spot lights' highlights off glossy
+    /// surfaces ([`crate::integrator::light_paths`]).
     pub caustics: bool,
     /// Image size in pixels (the camera keeps its vertical field of view at any size).
     pub resolution: UVec2,
@@ -296,7 +297,7 @@ fn render_pass(pass: &Pass, film: &mut Film, recording: &Seen, watch: Watch) -> 
                         a[k].add(smp.first_hit);
                     }
                     if let (Some(paths), Some(sums)) = (light_paths, &splat_sums) {
-                        splats.extend(paths.trace(scene, strategy, &stream, &mut tally.rays));
+                        splats.extend(paths.trace(scene, &stream, &mut tally.rays));
                         if splats.len() >= SPLAT_BATCH {
                             sums.add(&mut splats);
                         }

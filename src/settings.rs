@@ -165,8 +165,9 @@ pub struct RenderDefaults {
     pub clamp: Option<Clamp>,
     /// Path guiding, `true` or `false`.
     pub guiding: Option<bool>,
-    /// Light through smooth glass solved for (manifold next-event estimation), `true` or
-    /// `false`.
+    /// Caustics solved for, `true` or `false`: light through smooth glass (manifold
+    /// next-event estimation) and point and spot lights' highlights off glossy surfaces
+    /// (light paths).
     pub caustics: Option<bool>,
 }
 

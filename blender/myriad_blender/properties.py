@@ -58,10 +58,11 @@ class MyriadSettings(bpy.types.PropertyGroup):
         default=False,
     )
     caustics: bpy.props.BoolProperty(
-        name="Caustics Through Glass",
+        name="Caustics",
         description="Light that reaches a surface only through smooth glass (a lamp in a glass globe, the sun "
-        "through a glass ball) is solved for, where Cycles needs Shadow Caustics flags; off: left to chance, "
-        "and a point light's or the sun's never found",
+        "through a glass ball) is solved for, where Cycles needs Shadow Caustics flags, and the highlights "
+        "glossy surfaces throw from point and spot lights are traced from the lights; off: left to chance, "
+        "and a point light's or the sun's through glass never found",
         default=True,
     )
     seed: bpy.props.IntProperty(

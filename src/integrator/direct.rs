@@ -105,7 +105,7 @@ fn light_contribution(
     }
     let weight = match highlight {
         _ if !light.is_delta() => power_heuristic(pmf * ls.pdf, scattering.pdf(ls.wi)),
-        Some(h) => h.weight(scene, id, &ls, pmf),
+        Some(h) => h.weight(scene, id, &ls),
         None => 1.0,
     };
     unshadowed * weight

@@ -4,7 +4,8 @@
 //! point ([`direct::estimate_direct`]), and the counters both keep (with [`timing`], where a
 //! sample of the paths spends its time). Depends on scene, material,
 //! light, light_sampler, learning (what the paths record for whatever learns from them) and
-//! sampling; knows nothing of pixels or threads.
+//! sampling; knows nothing of threads, and of pixels only the one the camera projects a light
+//! path's last vertex to ([`light_paths`]).
 
 pub mod direct;
 pub mod guided;

@@ -7,17 +7,21 @@
 //! copper ball: the fireflies that decide their error). Traced from the light the same path
 //! is easy (BDPT's light tracing, t = 1): a direction from the light, the glossy lobe at x2
 //! sampled towards x1 (so its peak cancels), x1 joined to the camera. One camera sample in
-//! four ([`RATE`]) also traces such a light path (its numbers are the sample's:
+//! eight ([`RATE`]) also traces such a light path (its numbers are the sample's:
 //! [`Dim::LightPathLight`], [`Dim::LightPathDirection`], the BSDF's dimensions at sub-index 1),
 //! from a light chosen by the power it sends at glossy surfaces, in a direction that favours
 //! them ([`emission`]), and adds what it brings to the pixel where x1 is seen, as a splat.
 //!
 //! Both strategies sample the same paths (x1 seen by the pinhole camera, reflecting;
 //! x2 glossy, reflecting; a point or spot light), so each is weighed by the power heuristic
-//! against the other, with the densities both compute from one function ([`mis_ratio`]):
-//! the camera's density over the whole image × BSDF sampling at x1 × the light's choice at
-//! x2, against [`RATE`] (light paths per camera sample) × the light's choice × its direction ×
-//! BSDF sampling at x2. Every other path is the path tracer's alone.
+//! against the other, with the densities both compute from one function
+//! ([`Densities::ratio`]): the camera's density over the whole image × BSDF sampling at x1,
+//! against [`RATE`] (light paths per camera sample) × the light's density of directions ×
+//! BSDF sampling at x2, each given the light. The probabilities of choosing the light are left
+//! out of the weights on both sides: the weights still sum to 1 for every path, and the
+//! light tree's probability at x2, which a light path would otherwise have to replay, cost a
+//! quarter of a light path for 1–3 % of its error.
+//! Every other path is the path tracer's alone.
 //! Off with a lens (depth of field), guiding or clamping, where the path tracer's densities
 //! are not the ones written here.
 
@@ -28,8 +32,7 @@ use super::path::shading_normals;
 use crate::camera::Projection;
 use crate::film::Splat;
 use crate::geometry::{Ray, SurfaceHit};
-use crate::light::{Light, LightId, LightSample};
-use crate::light_sampler::{LightStrategy, ShadingContext};
+use crate::light::{Light, LightSample};
 use crate::material::{Bsdf, ShadingPoint};
 use crate::math::{Rgb, UVec2, Vec3A};
 use crate::sampling::{Dim, SampleStream};
@@ -109,12 +112,10 @@ impl Surface {
     }
 }
 
-/// The densities of one path camera → x1 → x2 → light under the two strategies, as their
-/// ratio light paths ÷ path tracer.
+/// The densities of one path camera → x1 → x2 → light under the two strategies, given the
+/// light, as their ratio light paths ÷ path tracer.
 #[derive(Clone, Copy, Debug)]
 struct Densities {
-    /// The light's probability among the light paths' lights.
-    light_pmf: f32,
     /// The light's density of emitting towards x2, per solid angle.
     emit_pdf: f32,
     /// |cos| at x2 of the way from the light, and the squared distance.
@@ -130,8 +131,6 @@ struct Densities {
     pdf_x1: f32,
     /// |cos| at x2 of the way to x1.
     cos_x2_x1: f32,
-    /// The probability with which next-event estimation at x2 chose the light.
-    selection_pmf: f32,
 }
 
 impl Densities {
@@ -139,21 +138,20 @@ impl Densities {
     /// distance x1–x2 cancels). Infinite where only light paths sample the path.
     #[inline]
     fn ratio(&self) -> f32 {
-        let light =
-            RATE * self.light_pmf * self.emit_pdf * self.cos_x2_light / self.dist2_light * self.pdf_x2 * self.cos_x1;
-        let camera = self.importance * self.pdf_x1 * self.cos_x2_x1 * self.selection_pmf;
+        let light = RATE * self.emit_pdf * self.cos_x2_light / self.dist2_light * self.pdf_x2 * self.cos_x1;
+        let camera = self.importance * self.pdf_x1 * self.cos_x2_x1;
         light / camera
     }
 }
 
 /// Light paths per camera sample: each camera sample traces one with this probability (and
-/// its splat counts 1/RATE times). Measured on materials.glb and lobby.glb (320 × 240, 64 spp,
-/// seed 0, relMSE against Cycles, wall seconds on 2 threads; without light paths 0.109 in
-/// 2.16 s and 0.110 in 4.39 s): 1 → 0.0146 in 3.87 s and 0.0830 in 6.64 s; ½ → 0.0151 / 3.18 s
-/// and 0.0836 / 5.28 s; ¼ → 0.0166 / 2.63 s and 0.0849 / 4.74 s; ⅛ → 0.0191 / 2.53 s and
-/// 0.0855 / 4.74 s. A light path costs about half a camera path, and most of what they take
-/// away is taken by a quarter of them.
-const RATE: f32 = 0.25;
+/// its splat counts 1/RATE times). A light path costs about as much as a camera path (three
+/// rays, two shaded vertices), and a few of them take most of the highlights' noise away.
+/// Against the build without light paths, `tools/switch_bench.py` (320 × 240, 64 spp, seeds
+/// 1–6, relMSE against Cycles, equal-CPU efficiency): ¼ → materials.glb 7.3×, lobby.glb 0.95×;
+/// ⅛ → 6.9× and 1.01×. With one per camera sample (and light chosen by power, uniform
+/// directions) lobby.glb lost 2 % (0.98×) for 18 % less error.
+pub const RATE: f32 = 0.125;
 
 /// The power heuristic's weight of the path tracer for a ratio `r` of densities.
 #[inline]
@@ -165,16 +163,7 @@ impl LightPaths {
     /// Light paths for `scene` rendered at `resolution`, or `None` where there is nothing
     /// for them: no point or spot light, no glossy material, or a lens.
     pub fn new(scene: &Scene, resolution: UVec2) -> Option<Self> {
-        let glossy = scene.materials.iter().any(|m| m.may_reflect_glossily());
-        if !glossy || scene.camera.has_lens() {
-            return None;
-        }
-        let ids: Vec<u32> = (0..scene.lights.len() as u32)
-            .filter(|&i| {
-                let light = &scene.lights[i as usize];
-                matches!(light, Light::Point(_) | Light::Spot(_)) && light.power(scene.radius) > 0.0
-            })
-            .collect();
+        let ids = Self::lights_of(scene);
         let probed = emission::probe_all(scene, &ids);
         // A light that sends little at glossy surfaces keeps a small chance (its highlights
         // on a glossy object the probes missed).
@@ -198,6 +187,21 @@ impl LightPaths {
         *cdf.last_mut().expect("one light at least") = 1.0;
         let directions = probed.into_iter().map(|p| p.directions).collect();
         Some(Self { ids, cdf, directions, resolution })
+    }
+
+    /// The point and spot lights of `scene` light paths would start from: none without a
+    /// glossy material, or with a lens.
+    pub fn lights_of(scene: &Scene) -> Vec<u32> {
+        let glossy = scene.materials.iter().any(|m| m.may_reflect_glossily());
+        if !glossy || scene.camera.has_lens() {
+            return Vec::new();
+        }
+        (0..scene.lights.len() as u32)
+            .filter(|&i| {
+                let light = &scene.lights[i as usize];
+                matches!(light, Light::Point(_) | Light::Spot(_)) && light.power(scene.radius) > 0.0
+            })
+            .collect()
     }
 
     /// How many lights they start from.
@@ -241,13 +245,7 @@ impl LightPaths {
     /// Traces the light path of one camera sample and returns what it adds to the image,
     /// weighted against the path tracer (per sample of the whole image: a pixel's mean adds
     /// its splats' sum over its samples per pixel).
-    pub fn trace(
-        &self,
-        scene: &Scene,
-        strategy: &LightStrategy,
-        stream: &SampleStream,
-        counters: &mut RayCounters,
-    ) -> Option<Splat> {
+    pub fn trace(&self, scene: &Scene, stream: &SampleStream, counters: &mut RayCounters) -> Option<Splat> {
         if stream.get_1d(0, Dim::LightPathLight, 1) >= RATE {
             return None;
         }
@@ -292,9 +290,7 @@ impl LightPaths {
         if scene.occluded(&Ray::new(start, scene.camera.position() - start), 1.0) {
             return None;
         }
-        let ctx = ShadingContext { p: hit2.p, n: at_x2.selection_normal() };
         let densities = Densities {
-            light_pmf,
             emit_pdf,
             cos_x2_light: hit2.n_geom.dot(dir).abs(),
             dist2_light: ls.distance * ls.distance,
@@ -303,7 +299,6 @@ impl LightPaths {
             importance: cam.importance,
             pdf_x1: at_x1.pdf(-bs.wi),
             cos_x2_x1: hit2.n_geom.dot(bs.wi).abs(),
-            selection_pmf: strategy.selection_pmf(&ctx, LightId(id), false),
         };
         let intensity = ls.radiance * densities.dist2_light;
         let value = f1 * f2 * intensity * (cam.importance * densities.cos_x2_x1)
@@ -320,14 +315,13 @@ impl LightPaths {
 
 impl Highlight<'_> {
     /// The path tracer's MIS weight for next-event estimation at this x2 of light `id` (its
-    /// sample `ls`, chosen with probability `selection_pmf`): 1 unless light paths start from it.
+    /// sample `ls`): 1 unless light paths start from it.
     #[inline]
-    pub fn weight(&self, scene: &Scene, id: u32, ls: &LightSample, selection_pmf: f32) -> f32 {
+    pub fn weight(&self, scene: &Scene, id: u32, ls: &LightSample) -> f32 {
         let Some(k) = self.paths.find(id) else { return 1.0 };
         let light = &scene.lights[id as usize];
         let from_light = self.surface.seen_from(ls.wi);
         let densities = Densities {
-            light_pmf: self.paths.pmf(k),
             emit_pdf: self.paths.directions[k].pdf(light, -ls.wi),
             cos_x2_light: self.surface.n_geom.dot(ls.wi).abs(),
             dist2_light: ls.distance * ls.distance,
@@ -336,7 +330,6 @@ impl Highlight<'_> {
             importance: self.x1.importance,
             pdf_x1: self.pdf_x1,
             cos_x2_x1: self.surface.n_geom.dot(self.wo).abs(),
-            selection_pmf,
         };
         path_tracer_weight(densities.ratio())
     }
