@@ -18,9 +18,10 @@ pub const MAX_COORDINATE: f32 = 1e12;
 /// must stay finite in f32.
 pub const MAX_POWER: f32 = 1e30;
 
-/// Bytes per pixel of a render: the film's fixed-point sums (96 bytes, 112 more with AOVs),
-/// the output channels and their copy in the EXR writer, the preview.
-pub const BYTES_PER_PIXEL: u64 = 360;
+/// Bytes per pixel of a render: the film's fixed-point sums (96 bytes, 112 more with AOVs,
+/// 96 more for light paths' splats), the output channels and their copy in the EXR writer,
+/// the preview.
+pub const BYTES_PER_PIXEL: u64 = 456;
 
 /// Bytes per triangle in the world: vertices and attributes, the BVH, the description it was
 /// built from.

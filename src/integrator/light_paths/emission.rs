@@ -54,8 +54,8 @@ fn intensity(light: &Light, dir: Vec3A) -> f32 {
     }
 }
 
-/// Where `light` emits from.
-fn position(light: &Light) -> Vec3A {
+/// Where `light` (a point or spot light) emits from.
+pub(super) fn position(light: &Light) -> Vec3A {
     match light {
         Light::Point(l) => l.position,
         Light::Spot(s) => s.position,

@@ -254,14 +254,9 @@ impl LightPaths {
         let (id, light_pmf) = (self.ids[k], self.pmf(k));
         let light = &scene.lights[id as usize];
         let (dir, emit_pdf) = self.directions[k].sample(light, stream.get_2d(0, Dim::LightPathDirection, 0));
-        let origin = match light {
-            Light::Point(l) => l.position,
-            Light::Spot(s) => s.position,
-            _ => unreachable!("light paths start from point and spot lights"),
-        };
         // x2: a glossy surface the light reaches.
         counters.rays += 1;
-        let hit2 = scene.intersect(&Ray::new(origin, dir), f32::INFINITY)?;
+        let hit2 = scene.intersect(&Ray::new(emission::position(light), dir), f32::INFINITY)?;
         let x2 = surface_at(scene, &hit2, dir)?;
         if !x2.can_be_x2() {
             return None;
