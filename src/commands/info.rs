@@ -141,14 +141,13 @@ impl fmt::Display for InfoReport {
                 "no emissive surface, lamp, point or directional light to solve for through smooth glass".into()
             }
         )?;
-        let punctual = crate::integrator::light_paths::LightPaths::lights_of(s).len();
+        let paths = crate::integrator::light_paths::LightPaths::new(s, r.resolution);
         let caustics = r.render.caustics.unwrap_or(crate::commands::settings::DEFAULT_CAUSTICS);
         writeln!(
             f,
             "highlights   {}",
-            match (punctual, caustics) {
-                (0, _) =>
-                    "no point or spot light with a glossy surface to light (or a lens): no light paths".to_string(),
+            match (paths.map_or(0, |p| p.lights()), caustics) {
+                (0, _) => "no point or spot light whose highlight off a glossy surface the camera sees (or a lens): no light paths".to_string(),
                 (n, true) => format!(
                     "light paths from {n} point and spot lights bring their highlights off glossy surfaces, one per {} camera samples (--caustics)",
                     (1.0 / crate::integrator::light_paths::RATE).round()

@@ -161,10 +161,14 @@ fn path_tracer_weight(r: f32) -> f32 {
 
 impl LightPaths {
     /// Light paths for `scene` rendered at `resolution`, or `None` where there is nothing
-    /// for them: no point or spot light, no glossy material, or a lens.
+    /// for them: no point or spot light, no glossy material, a lens, or no highlight the
+    /// camera sees that the probes found ([`emission`]).
     pub fn new(scene: &Scene, resolution: UVec2) -> Option<Self> {
         let ids = Self::lights_of(scene);
-        let probed = emission::probe_all(scene, &ids);
+        let probed = emission::probe_all(scene, &ids, resolution);
+        if !probed.iter().any(|p| p.sees_highlight) {
+            return None;
+        }
         // A light that sends little at glossy surfaces keeps a small chance (its highlights
         // on a glossy object the probes missed).
         let powers: Vec<f64> = ids
@@ -189,9 +193,9 @@ impl LightPaths {
         Some(Self { ids, cdf, directions, resolution })
     }
 
-    /// The point and spot lights of `scene` light paths would start from: none without a
+    /// The point and spot lights of `scene` light paths may start from: none without a
     /// glossy material, or with a lens.
-    pub fn lights_of(scene: &Scene) -> Vec<u32> {
+    fn lights_of(scene: &Scene) -> Vec<u32> {
         let glossy = scene.materials.iter().any(|m| m.may_reflect_glossily());
         if !glossy || scene.camera.has_lens() {
             return Vec::new();
