@@ -52,6 +52,10 @@ impl FirstHit {
 /// 0.228 → 0.210 for 1.04× the rays); without roulette 0.0037 / 32.5 (0.88×).
 const RR_MIN_DEPTH: u32 = 4;
 
+// Light paths weigh next-event estimation at a path's second vertex with the path's density
+// there, which roulette before it would change.
+const _: () = assert!(RR_MIN_DEPTH >= 2, "light paths assume no roulette before the second vertex");
+
 /// What one camera path found.
 #[derive(Clone, Copy, Debug)]
 pub struct PathSample {
@@ -282,9 +286,9 @@ pub struct Tracer<'a> {
     /// Whether light through smooth glass is solved for (the scene has some to solve for
     /// and the render asks for it).
     pub caustics: bool,
-    /// The light paths each camera sample also traces, when the render traces them (what
-    /// next-event estimation of point and spot lights at glossy second vertices is weighed
-    /// against).
+    /// The light paths that camera samples also trace (one in eight), when the render traces
+    /// them: what next-event estimation of point and spot lights at glossy second vertices is
+    /// weighed against.
     pub light_paths: Option<&'a LightPaths>,
 }
 
