@@ -98,8 +98,8 @@ impl Surface {
         ShadingPoint::new(self.bsdf, self.n_geom, self.n_shading, self.tangent, wo)
     }
 
-    /// Whether a path camera → x1 → x2 → light with this surface as x1 is one light paths
-    /// sample (it reflects, and is not smooth glass's).
+    /// Whether light paths sample paths camera → x1 → x2 → light with this surface as x1:
+    /// where it does not transmit.
     #[inline]
     pub fn can_be_x1(&self) -> bool {
         !self.bsdf.transmits()
