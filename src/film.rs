@@ -372,6 +372,35 @@ mod tests {
     }
 
     #[test]
+    fn splats_add_to_the_mean_and_their_squares_to_its_variance_in_any_order() {
+        let film = |order: &[usize]| {
+            let mut film = Film::new(UVec2::new(2, 1), false).with_splats();
+            let (bands, splats) = film.bands_mut(1);
+            for (_, px, _) in bands {
+                for v in [1.0f32, 2.0, 3.0, 4.0] {
+                    px[0].add(Rgb::splat(v));
+                }
+            }
+            let all = [Splat { pixel: 0, value: Rgb::splat(2.0) }, Splat { pixel: 0, value: Rgb::splat(6.0) }];
+            let mut batch: Vec<Splat> = order.iter().map(|&k| all[k]).collect();
+            splats.expect("a film with splats").add(&mut batch);
+            assert!(batch.is_empty());
+            film.add_spp(4);
+            film
+        };
+        let (a, b) = (film(&[0, 1]), film(&[1, 0]));
+        assert!(a.same_sums(&b));
+        // (1 + 2 + 3 + 4 + 2 + 6) / 4; 5/12 for the samples plus (2² + 6²) / 4² for the splats.
+        assert_eq!(a.mean(0), Rgb::splat(4.5));
+        assert!((a.variance_of_mean(0).x - (5.0 / 12.0 + 40.0 / 16.0)).abs() < 1e-5);
+        assert_eq!(a.mean(1), Rgb::ZERO);
+        let bytes = a.sums_bytes();
+        assert_eq!(bytes.len(), 2 * Film::bytes_per_pixel(false, true));
+        assert!(Film::from_sums_bytes(a.size(), 4, false, true, &bytes).is_some_and(|f| f.same_sums(&a)));
+        assert!(Film::from_sums_bytes(a.size(), 4, false, false, &bytes).is_none(), "splats' bytes are counted");
+    }
+
+    #[test]
     fn any_split_of_the_samples_merges_to_the_same_bits() {
         // Values over 30 decades, both signs, the clamp and NaN: however the samples are cut
         // into parts and in whatever order the parts merge, the sums are the same.
