@@ -12,6 +12,7 @@ pub mod guided;
 pub mod light_paths;
 pub mod mnee;
 pub mod path;
+pub mod surface;
 pub mod timing;
 
 pub use path::{FirstHit, Tracer};

@@ -9,8 +9,9 @@
 
 use super::direct::estimate_direct;
 use super::guided::Scattering;
-use super::light_paths::{CameraVertex, Highlight, LightPaths, Surface};
+use super::light_paths::{CameraVertex, Highlight, LightPaths};
 use super::mnee::{AtVertex, GlassChain, MAX_CASTERS};
+use super::surface::Surface;
 use super::timing::{Stopwatch, timed};
 use super::transmittance;
 use super::{RayCounters, Tally};
@@ -18,7 +19,6 @@ use crate::geometry::{Ray, SurfaceHit};
 use crate::guiding::Guide;
 use crate::light::{Light, LightId};
 use crate::light_sampler::{LightStrategy, ShadingContext};
-use crate::material::ShadingPoint;
 use crate::math::{Rgb, Vec3A, power_heuristic};
 use crate::sampling::{Dim, SampleStream};
 use crate::scene::Scene;
@@ -215,29 +215,6 @@ fn emitted(
     beta * le * weight
 }
 
-/// The shading normal (normal-mapped) and tangent (anisotropic BSDFs) of `material` at `hit`.
-#[inline]
-pub(super) fn shading_normals(
-    scene: &Scene,
-    material: &crate::material::Material,
-    hit: &SurfaceHit,
-) -> (Vec3A, Option<Vec3A>) {
-    let n_shading = material.mapped_normal(
-        hit.n_shading,
-        || scene.geometry.position_derivatives(hit.triangle),
-        hit.uv,
-        &scene.images,
-    );
-    let tangent = material.tangent(
-        n_shading,
-        || scene.geometry.tangent_at(hit.triangle, hit.p),
-        || scene.geometry.position_derivatives(hit.triangle),
-        hit.uv,
-        &scene.images,
-    );
-    (n_shading, tangent)
-}
-
 /// Russian roulette from [`RR_MIN_DEPTH`] on: a path survives with probability
 /// min(1, max(beta)^¼) and carries `beta` divided by it; false when it ends. The fourth root
 /// ends dim paths less eagerly than Cycles' square root (or max(beta)) would: in closed
@@ -342,23 +319,19 @@ impl Tracer<'_> {
             // Glass on a chain from a receiver is crossed as the connection solves it: smooth.
             let as_smooth = glass.is_some() && chain.from_receiver();
             let entering = ray.dir.dot(hit.n_geom) < 0.0;
-            let Some(bsdf) = material.bsdf(hit.uv, &scene.images, entering, as_smooth) else { break };
-            let (n_shading, tangent) = shading_normals(scene, material, &hit);
-            let sp = ShadingPoint::new(bsdf, hit.n_geom, n_shading, tangent, wo);
+            let Some(surface) = Surface::at(scene, material, &hit, entering, as_smooth) else { break };
+            let sp = surface.seen_from(wo);
             let scattering = Scattering::new(sp, hit.p, guide);
             // Light paths sample camera → x1 → glossy x2 → point or spot light too.
-            let highlight = light_paths.and_then(|paths| {
-                let surface = Surface { bsdf, n_geom: hit.n_geom, n_shading, tangent };
-                match (depth, x1, prev) {
-                    (0, ..) => {
-                        x1 = paths.camera_vertex(scene, &hit, &surface);
-                        None
-                    }
-                    (1, Some(x1), Some(prev)) if surface.can_be_x2() => {
-                        Some(Highlight { paths, x1, pdf_x1: prev.bsdf_pdf, surface, wo })
-                    }
-                    _ => None,
+            let highlight = light_paths.and_then(|paths| match (depth, x1, prev) {
+                (0, ..) => {
+                    x1 = paths.camera_vertex(scene, &hit, &surface);
+                    None
                 }
+                (1, Some(x1), Some(prev)) if surface.can_be_x2() => {
+                    Some(Highlight { paths, x1, pdf_x1: prev.bsdf_pdf, surface, wo })
+                }
+                _ => None,
             });
             // Where next-event estimation also looks through smooth glass: off it, outside it.
             let receiver = caustics && glass.is_none() && medium == Rgb::ZERO;

@@ -28,12 +28,12 @@
 mod emission;
 
 use super::RayCounters;
-use super::path::shading_normals;
+use super::surface::Surface;
 use crate::camera::Projection;
 use crate::film::Splat;
 use crate::geometry::{Ray, SurfaceHit};
 use crate::light::{Light, LightSample};
-use crate::material::{Bsdf, ShadingPoint};
+use crate::material::Bsdf;
 use crate::math::{Rgb, UVec2, Vec3A};
 use crate::sampling::{Dim, SampleStream};
 use crate::scene::Scene;
@@ -78,26 +78,7 @@ pub struct Highlight<'a> {
     pub wo: Vec3A,
 }
 
-/// A BSDF on a surface point before it is seen from any direction.
-#[derive(Clone, Copy, Debug)]
-pub struct Surface {
-    /// The BSDF.
-    pub bsdf: Bsdf,
-    /// Geometric normal (as hit).
-    pub n_geom: Vec3A,
-    /// Shading normal (normal-mapped).
-    pub n_shading: Vec3A,
-    /// Tangent of anisotropic BSDFs.
-    pub tangent: Option<Vec3A>,
-}
-
 impl Surface {
-    /// The BSDF seen from `wo`.
-    #[inline]
-    pub fn seen_from(&self, wo: Vec3A) -> ShadingPoint {
-        ShadingPoint::new(self.bsdf, self.n_geom, self.n_shading, self.tangent, wo)
-    }
-
     /// Whether light paths sample paths camera → x1 → x2 → light with this surface as x1:
     /// where it does not transmit.
     #[inline]
@@ -337,8 +318,5 @@ impl Highlight<'_> {
 /// The BSDF at `hit`, reached along `dir`, as the path tracer would shade it there.
 #[inline]
 fn surface_at(scene: &Scene, hit: &SurfaceHit, dir: Vec3A) -> Option<Surface> {
-    let material = &scene.materials[hit.material as usize];
-    let bsdf = material.bsdf(hit.uv, &scene.images, dir.dot(hit.n_geom) < 0.0, false)?;
-    let (n_shading, tangent) = shading_normals(scene, material, hit);
-    Some(Surface { bsdf, n_geom: hit.n_geom, n_shading, tangent })
+    Surface::at(scene, &scene.materials[hit.material as usize], hit, dir.dot(hit.n_geom) < 0.0, false)
 }
