@@ -54,7 +54,7 @@ fn selection(c: &mut Criterion) {
                     k += 1;
                     let st = SampleStream::new(3, k, 0);
                     let p = st.get_2d(0, Dim::PixelJitter, 0);
-                    let ctx = ShadingContext { p: Vec3A::new(p.x * 20.0 - 10.0, 0.0, p.y * 20.0 - 10.0), n: Vec3A::Y };
+                    let ctx = ShadingContext::new(Vec3A::new(p.x * 20.0 - 10.0, 0.0, p.y * 20.0 - 10.0), Vec3A::Y);
                     let picked = s.sample(black_box(&ctx), st.get_1d_u64(0, Dim::LightSelect, 0));
                     black_box(picked.map(|x| s.pmf(&ctx, LightId(x.light.0))))
                 })

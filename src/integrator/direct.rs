@@ -146,7 +146,7 @@ pub fn estimate_direct(
         Some(sampler) => {
             let u_select = stream.get_1d_u64(bounce, Dim::LightSelect, 0);
             let u_point = stream.get_2d_u64(bounce, Dim::LightPoint, 0);
-            let ctx = ShadingContext { p, n: sp.selection_normal() };
+            let ctx = ShadingContext::of(p, sp);
             let rays = &mut tally.rays;
             let choice = timed(rays.timing, &mut rays.time.choice, || {
                 sampler.sample_prefetching(&ctx, diffuse, u_select, &scene.lights)

@@ -358,11 +358,7 @@ impl Tracer<'_> {
             if bs.wi.dot(sp.n_geom) < 0.0 && !material.thin {
                 medium = if entering { material.absorption } else { Rgb::ZERO };
             }
-            let left = Previous {
-                ctx: ShadingContext { p: hit.p, n: sp.selection_normal() },
-                bsdf_pdf: bs.pdf,
-                diffuse: sp.is_diffuse(),
-            };
+            let left = Previous { ctx: ShadingContext::of(hit.p, &sp), bsdf_pdf: bs.pdf, diffuse: sp.is_diffuse() };
             chain = match glass {
                 _ if receiver => GlassChain::leaving(left.ctx, left.diffuse, sp.n_geom, left.bsdf_pdf),
                 Some(_) if bs.wi.dot(sp.n_geom) < 0.0 => chain.through(hit.p),

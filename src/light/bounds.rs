@@ -29,6 +29,7 @@
 //! never 0 for a light that emits.
 
 use super::Light;
+use crate::material::GlossyLobes;
 use crate::math::{Vec3A, safe_acos, safe_sqrt};
 use std::f32::consts::PI;
 use wide::{CmpGe, CmpGt, CmpLe};
@@ -234,6 +235,35 @@ impl BoundsPacket {
             }
         }
         select(self.infinite, infinite, importance)
+    }
+}
+
+impl BoundsPacket {
+    /// What a glossy BSDF at `p` sends towards each lane's lights: `lobes`' weight at the
+    /// smallest angle between its mirror direction and a direction into the lane's bounding
+    /// sphere (for directional lanes, into their cone of directions), so at least its weight
+    /// towards any light of the lane.
+    #[inline]
+    pub fn lobe_weights(&self, p: Vec3A, lobes: &GlossyLobes) -> Lanes {
+        let splat = Lanes::splat;
+        let (dx, dy, dz) = (splat(p.x) - self.cx, splat(p.y) - self.cy, splat(p.z) - self.cz);
+        let dist2 = dx * dx + dy * dy + dz * dz;
+        let inv_dist = select(dist2.cmp_gt(Lanes::ZERO), Lanes::ONE / dist2.sqrt(), Lanes::ZERO);
+        let (mx, my, mz) = (splat(lobes.mirror.x), splat(lobes.mirror.y), splat(lobes.mirror.z));
+        // The angle between the mirror direction and the direction towards the centre, less
+        // the half-angle the bounding sphere subtends (all of it from inside the sphere).
+        let m_d = mx * dx + my * dy + mz * dz;
+        let (cos_m, sin_m) = (-m_d * inv_dist, max(dist2 - m_d * m_d, Lanes::ZERO).sqrt() * inv_dist);
+        let inside = dist2.cmp_le(self.r2);
+        let sin_b = select(inside, Lanes::ZERO, self.r2.sqrt() * inv_dist);
+        let cos_b = select(inside, splat(-1.0), max(dist2 - self.r2, Lanes::ZERO).sqrt() * inv_dist);
+        let finite = cos_sub_clamped(cos_m, sin_m, cos_b, sin_b);
+        let cos_w = mx * self.wx + my * self.wy + mz * self.wz;
+        let infinite = cos_sub_clamped(cos_w, sin_from_cos(cos_w), self.cos_o, self.sin_o);
+        // The solid angle of the bounding sphere's cone, or of the directional cone.
+        let cos_extent = select(self.infinite, self.cos_o, cos_b);
+        let solid_angle = (Lanes::ONE - cos_extent) * splat(2.0 * PI);
+        lobes.weights(select(self.infinite, infinite, finite), solid_angle)
     }
 }
 
@@ -477,6 +507,33 @@ mod tests {
         assert_eq!(v[1], imp(&b, p, Vec3A::Y));
         assert!(v[2..].iter().all(|&x| x == 0.0));
         assert_eq!(BoundsPacket::new(&[]).importance(Vec3A::ZERO, Vec3A::ZERO).to_array(), [0.0; LANES]);
+    }
+
+    #[test]
+    fn lobe_weights_are_the_lobe_at_a_point_light_and_its_energy_over_a_wide_cluster() {
+        let lobes = GlossyLobes::new(Vec3A::Y, 0.1, [(0.9, 0.05), (0.0, 1.0)]);
+        let p = Vec3A::new(0.0, 0.5, 0.0);
+        let point = |at: Vec3A| Light::Point(PointLight { position: at, intensity: Rgb::ONE }).bounds();
+        let sun =
+            crate::light::DistantLight { direction: Vec3A::new(-1.0, -2.0, 0.0).normalize(), irradiance: Rgb::ONE };
+        let sun = Light::Distant(sun).bounds();
+        let (above, aside) = (point(Vec3A::new(0.0, 3.0, 0.0)), point(Vec3A::new(2.0, 2.5, 0.0)));
+        // A wide panel straddling the mirror direction: its sphere subtends a large cone.
+        let panel = quad(Vec3A::new(0.0, 1.0, 0.0), true, false).bounds();
+        let w = BoundsPacket::new(&[above, aside, sun, panel]).lobe_weights(p, &lobes).to_array();
+        assert!((w[0] / lobes.weight(1.0) - 1.0).abs() < 1e-5, "{} vs {}", w[0], lobes.weight(1.0));
+        let cos_aside = (Vec3A::new(2.0, 2.0, 0.0)).normalize().dot(Vec3A::Y);
+        assert!((w[1] / lobes.weight(cos_aside) - 1.0).abs() < 1e-4, "{} vs {}", w[1], lobes.weight(cos_aside));
+        // The sun shines from (1, 2, 0)/√5.
+        let cos_sun = Vec3A::new(1.0, 2.0, 0.0).normalize().dot(Vec3A::Y);
+        assert!((w[2] / lobes.weight(cos_sun) - 1.0).abs() < 1e-4, "{} vs {}", w[2], lobes.weight(cos_sun));
+        // The panel holds the mirror direction but spreads over more than the lobe: the lobe's
+        // energy over its solid angle, far below the peak, above the diffuse part alone.
+        let r2 = 0.25 * (panel.max - panel.min).length_squared();
+        let cos_b = (1.0 - r2 / 0.25).sqrt();
+        let expected = 0.1 / PI + 0.9 / (2.0 * PI * (1.0 - cos_b));
+        assert!((w[3] / expected - 1.0).abs() < 1e-3, "{} vs {expected}", w[3]);
+        assert!(w[3] < 0.2 * w[0] && w[3] > 0.1 / PI);
     }
 
     fn quad(center: Vec3A, n_down: bool, two_sided: bool) -> Light {

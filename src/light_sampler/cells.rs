@@ -342,7 +342,7 @@ impl CellSampler {
     /// Every entry's importance at `p` along `n` as a share of their sum (`None` when all
     /// are 0); `w` is scratch.
     fn shares(&self, p: Vec3A, n: Vec3A, w: &mut Vec<f32>) -> Option<Vec<f64>> {
-        self.entries.importances(&self.tree, &ShadingContext { p, n }, w);
+        self.entries.importances(&self.tree, &ShadingContext::new(p, n), w);
         let total: f64 = w.iter().map(|&x| x.max(0.0) as f64).sum();
         (total > 0.0 && total.is_finite()).then(|| w.iter().map(|&x| x.max(0.0) as f64 / total).collect())
     }
@@ -494,11 +494,11 @@ mod tests {
         // left, and it is even, up to the one of a table's 2¹⁶ values a light may get more
         // or less than its share.
         let value = 1.0 / Table16::VALUES as f32;
-        let above = ShadingContext { p: Vec3A::new(1.0, 3.5, 1.0), n: Vec3A::Y };
+        let above = ShadingContext::new(Vec3A::new(1.0, 3.5, 1.0), Vec3A::Y);
         for l in 0..40 {
             assert!((s.pmf(&above, LightId(l)) - 1.0 / 40.0).abs() <= value);
         }
-        let below = ShadingContext { p: Vec3A::new(0.2, 0.0, 0.2), n: Vec3A::Y };
+        let below = ShadingContext::new(Vec3A::new(0.2, 0.0, 0.2), Vec3A::Y);
         assert!(s.choice(&below).is_some(), "2 m from the lamps a table will do");
         for l in 0..40 {
             assert!(s.pmf(&below, LightId(l)) >= UNIFORM_SHARE / 40.0 - value);
@@ -513,7 +513,7 @@ mod tests {
         let mut lights = lamps(8);
         lights.push(Light::Point(PointLight { position: Vec3A::new(0.26, 0.001, 0.51), intensity: Rgb::splat(0.01) }));
         let s = sampler(&lights);
-        let near = ShadingContext { p: Vec3A::new(0.3, 0.0, 0.55), n: Vec3A::Y };
+        let near = ShadingContext::new(Vec3A::new(0.3, 0.0, 0.55), Vec3A::Y);
         assert!(s.choice(&near).is_some(), "a point light 1 mm above the floor, 1 cm off a corner: {:?}", s.stats());
         let st = s.stats();
         assert_eq!((st.splits, st.on_tree), (SPLITS as usize, 0), "{st:?}");
@@ -524,7 +524,7 @@ mod tests {
         assert!(s.table(corner, 0.125, Vec3A::Y, LAST_TRUST).is_some());
         check_tiling(&s, &near, 9);
         // A metre and more away a table does at once.
-        let off = ShadingContext { p: Vec3A::new(0.6, 0.0, -0.7), n: Vec3A::Y };
+        let off = ShadingContext::new(Vec3A::new(0.6, 0.0, -0.7), Vec3A::Y);
         assert!(s.choice(&off).is_some());
         check_tiling(&s, &off, 9);
     }
@@ -539,7 +539,7 @@ mod tests {
             intensity: Rgb::splat(0.01),
         }));
         let s = sampler(&lights);
-        let near = ShadingContext { p: Vec3A::new(0.3, 0.0, 0.55), n: Vec3A::Y };
+        let near = ShadingContext::new(Vec3A::new(0.3, 0.0, 0.55), Vec3A::Y);
         assert!(s.choice(&near).is_none(), "{:?}", s.stats());
         for l in 0..9 {
             assert_eq!(s.pmf(&near, LightId(l)), s.tree.pmf(&near, LightId(l)));
@@ -566,9 +566,9 @@ mod tests {
         let Entries::Clusters(f) = &s.entries else { panic!("1500 lights: clusters") };
         assert!((64..=MAX_LIGHTS as u32).contains(&f.clusters), "{} clusters", f.clusters);
         for ctx in [
-            ShadingContext { p: Vec3A::new(1.0, 0.0, 40.0), n: Vec3A::Y },
-            ShadingContext { p: Vec3A::new(2.0, 1.9, 90.0), n: Vec3A::Y },
-            ShadingContext { p: Vec3A::new(3.0, 1.0, 20.0), n: Vec3A::ZERO },
+            ShadingContext::new(Vec3A::new(1.0, 0.0, 40.0), Vec3A::Y),
+            ShadingContext::new(Vec3A::new(2.0, 1.9, 90.0), Vec3A::Y),
+            ShadingContext::new(Vec3A::new(3.0, 1.0, 20.0), Vec3A::ZERO),
         ] {
             assert!(s.choice(&ctx).is_some(), "{ctx:?}: a table");
             check_tiling(&s, &ctx, 1500);
@@ -588,7 +588,7 @@ mod tests {
     fn over_clusters_the_tree_chooses_at_glossy_points_and_the_tables_at_diffuse_ones() {
         let lights = lamps(1500);
         let s = sampler(&lights);
-        let ctx = ShadingContext { p: Vec3A::new(1.0, 0.0, 40.0), n: Vec3A::Y };
+        let ctx = ShadingContext::new(Vec3A::new(1.0, 0.0, 40.0), Vec3A::Y);
         let (mut same, mut differ) = (0, 0);
         for k in 0..500u64 {
             let u = k.wrapping_mul(0x9e37_79b9_7f4a_7c15);
@@ -603,7 +603,7 @@ mod tests {
         assert!(differ > same, "the tables choose otherwise than the tree: {differ} against {same}");
         // Over the lights themselves, the tables choose at glossy points too.
         let few = sampler(&lamps(40));
-        let below = ShadingContext { p: Vec3A::new(0.2, 0.0, 0.2), n: Vec3A::Y };
+        let below = ShadingContext::new(Vec3A::new(0.2, 0.0, 0.2), Vec3A::Y);
         for l in 0..40 {
             assert_eq!(few.interval_at(&below, false, LightId(l)), few.interval_at(&below, true, LightId(l)));
         }
@@ -628,7 +628,7 @@ mod tests {
     fn a_clone_builds_the_same_cells() {
         let lights = lamps(20);
         let a = sampler(&lights);
-        let ctx = ShadingContext { p: Vec3A::new(0.7, 0.3, 1.1), n: -Vec3A::X };
+        let ctx = ShadingContext::new(Vec3A::new(0.7, 0.3, 1.1), -Vec3A::X);
         let picked = a.sample(&ctx, 0x1234_5678_9abc_def0);
         let b = a.clone();
         assert_eq!(b.stats().tables, 0);

@@ -109,7 +109,7 @@ mod tests {
     fn points_land_in_the_cell_that_holds_them_and_points_outside_in_the_nearest() {
         let grid = SceneGrid::new(Vec3A::ZERO, 8.0);
         assert_eq!(grid.edge(), 1.0);
-        let at = |p: Vec3A| grid.locate(&ShadingContext { p, n: Vec3A::Y });
+        let at = |p: Vec3A| grid.locate(&ShadingContext::new(p, Vec3A::Y));
         // (−8, −8, −8) is the lowest corner; (0.5, 0.5, 0.5) is in cell (8, 8, 8).
         let (index, corner) = at(Vec3A::splat(0.5));
         assert_eq!(corner, Vec3A::ZERO);

@@ -24,6 +24,7 @@ pub use tree::{LightTree, TreeStats, WIDTH as TREE_WIDTH};
 pub use uniform::UniformSampler;
 
 use crate::light::{Light, LightId};
+use crate::material::{GlossyLobes, ShadingPoint};
 use crate::math::Vec3A;
 use crate::math::distribution::probability;
 use crate::settings::LightSamplerKind;
@@ -37,6 +38,24 @@ pub struct ShadingContext {
     pub p: Vec3A,
     /// Unit normal on the side light arrives from, or zero.
     pub n: Vec3A,
+    /// Where a glossy BSDF there reflects, which the light tree weighs clusters by too.
+    pub lobes: Option<GlossyLobes>,
+}
+
+impl ShadingContext {
+    /// A receiving point `p` with normal `n` (or zero), weighing lights by irradiance alone.
+    #[inline]
+    pub fn new(p: Vec3A, n: Vec3A) -> Self {
+        Self { p, n, lobes: None }
+    }
+
+    /// The context of shading point `sp` at `p`: its selection normal and, where its BSDF
+    /// is glossy, its lobes. Next-event estimation and the MIS weight of a light a
+    /// BSDF-sampled ray meets both build it here, so both see the same weights.
+    #[inline]
+    pub fn of(p: Vec3A, sp: &ShadingPoint) -> Self {
+        Self { p, n: sp.selection_normal(), lobes: sp.glossy_lobes() }
+    }
 }
 
 /// A chosen light and the probability it was chosen with.

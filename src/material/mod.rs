@@ -11,6 +11,7 @@
 
 mod diffuse;
 pub mod fresnel;
+mod lobes;
 mod microfacet;
 mod principled;
 mod sheen;
@@ -18,6 +19,7 @@ pub mod tables;
 pub mod texture;
 
 pub use diffuse::Diffuse;
+pub use lobes::{GlossyLobes, MIN_SELECTION_ALPHA};
 pub use microfacet::Ggx;
 pub use principled::{Principled, PrincipledAt};
 pub use texture::{Image, TextureRef};
@@ -571,6 +573,24 @@ impl ShadingPoint {
     #[inline]
     pub fn is_diffuse(&self) -> bool {
         self.bsdf.is_diffuse()
+    }
+
+    /// The BSDF as light selection weighs it ([`GlossyLobes`]): none for Lambert's, which
+    /// weighs every direction alike, nor for surfaces that let light through (selection
+    /// weighs their lights without a horizon, [`selection_normal`](Self::selection_normal)).
+    #[inline]
+    pub fn glossy_lobes(&self) -> Option<GlossyLobes> {
+        let BsdfAt::Principled(b) = &self.bsdf else { return None };
+        if self.transmits {
+            return None;
+        }
+        let (diffuse, glossy) = b.reflection_shares();
+        if glossy[0].0 + glossy[1].0 <= 0.0 {
+            return None;
+        }
+        let wo = b.wo();
+        let mirror = self.frame.to_world(Vec3A::new(-wo.x, -wo.y, wo.z));
+        Some(GlossyLobes::new(mirror, diffuse, glossy))
     }
 
     /// Samples a world direction.

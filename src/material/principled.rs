@@ -436,6 +436,12 @@ pub struct PrincipledAt {
 }
 
 impl PrincipledAt {
+    /// The outgoing direction it is seen from (local frame).
+    #[inline]
+    pub fn wo(&self) -> Vec3A {
+        self.wo
+    }
+
     /// BSDF value (without the cosine) towards `wi`.
     #[inline]
     pub fn eval(&self, wi: Vec3A) -> Rgb {
@@ -456,6 +462,17 @@ impl PrincipledAt {
         let diffuse = (1.0 - v.p_sheen - v.p_coat - v.p_glossy - v.p_glass).max(0.0);
         let coat = m.coat.map_or(0.0, |c| c.roughness);
         diffuse + v.p_sheen + v.p_coat * coat + (v.p_glossy + v.p_glass) * m.roughness
+    }
+
+    /// How the energy it reflects divides between its diffuse part and its GGX lobes about the
+    /// mirror direction (the base's, the coat's): their shares and widths α (the wider axis
+    /// where anisotropic), what light selection weighs it by.
+    #[inline]
+    pub fn reflection_shares(&self) -> (f32, [(f32, f32); 2]) {
+        let (m, v) = (&self.model, &self.view);
+        let diffuse = (1.0 - v.p_coat - v.p_glossy - v.p_glass).max(0.0);
+        let coat = m.coat.map_or((0.0, 1.0), |c| (v.p_coat, c.ggx.alpha_x));
+        (diffuse, [(v.p_glossy, m.ggx.alpha_x.max(m.ggx.alpha_y)), coat])
     }
 
     /// Solid-angle density of [`PrincipledAt::sample`] at `wi`.

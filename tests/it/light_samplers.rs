@@ -8,6 +8,7 @@ use myriad::light::{AreaEmission, DistantLight, Light, LightId, PointLight, Quad
 use myriad::light_sampler::{
     DEFENSIVE, LEVELS, LearnedSampler, LightSampler, LightStrategy, Observations, ShadingContext,
 };
+use myriad::material::GlossyLobes;
 use myriad::math::{Rgb, Vec3A};
 use myriad::sampling::{Dim, SampleStream};
 use myriad::settings::LightSamplerKind;
@@ -65,7 +66,12 @@ pub fn contexts(n: usize) -> Vec<ShadingContext> {
             } else {
                 Vec3A::new(rnd(i, 14) - 0.5, rnd(i, 15) - 0.3, rnd(i, 16) - 0.5).normalize()
             };
-            ShadingContext { p, n }
+            // Every third context with a normal is a glossy point, whose lobe the tree weighs.
+            let lobes = (i % 3 == 1 && n != Vec3A::ZERO).then(|| {
+                let mirror = Vec3A::new(rnd(i, 17) - 0.5, rnd(i, 18), rnd(i, 19) - 0.5).normalize();
+                GlossyLobes::new(mirror, rnd(i, 20) * 0.5, [(0.5, 0.02 + rnd(i, 21) * 0.3), (0.2, 0.05)])
+            });
+            ShadingContext { lobes, ..ShadingContext::new(p, n) }
         })
         .collect()
 }
@@ -138,7 +144,7 @@ fn dim_and_bright(n: usize) -> Vec<Light> {
 fn million_light_check(kind: LightSamplerKind, n: usize, draws: u64) {
     let lights = dim_and_bright(n);
     let s = one_light_sampler(kind, &lights);
-    let ctx = ShadingContext { p: Vec3A::new(0.5, 0.0, -0.5), n: Vec3A::Y };
+    let ctx = ShadingContext::new(Vec3A::new(0.5, 0.0, -0.5), Vec3A::Y);
     let dim: f64 = (0..n as u32).map(|i| s.pmf(&ctx, LightId(i)) as f64).filter(|&p| p < 2f64.powi(-24)).sum();
     // The dim lights hold enough mass that missing them would show.
     assert!(dim * draws as f64 > 1000.0, "{kind}: only {dim} of the pmf is below 2^-24");
@@ -180,7 +186,7 @@ fn cells_over_clusters_of_many_lights_picks_as_its_pmf_says() {
 fn power_sampler_is_proportional_to_the_brightest_channel_of_the_flux() {
     let lights = mixed_lights(50);
     let s = one_light_sampler(LightSamplerKind::Power, &lights);
-    let ctx = ShadingContext { p: Vec3A::ZERO, n: Vec3A::Y };
+    let ctx = ShadingContext::new(Vec3A::ZERO, Vec3A::Y);
     let weight = |l: &Light| l.flux(10.0).max_element() as f64;
     let total: f64 = lights.iter().map(weight).sum();
     for (i, l) in lights.iter().enumerate() {
@@ -243,7 +249,7 @@ fn estimator_matches_the_sum(n: u64) {
         })
         .collect();
     let ctxs: Vec<ShadingContext> = (0..6u64)
-        .map(|i| ShadingContext { p: Vec3A::new(rnd(i, 31) * 16.0 - 8.0, 0.0, rnd(i, 32) * 16.0 - 8.0), n: Vec3A::Y })
+        .map(|i| ShadingContext::new(Vec3A::new(rnd(i, 31) * 16.0 - 8.0, 0.0, rnd(i, 32) * 16.0 - 8.0), Vec3A::Y))
         .collect();
     // Two light counts, each every sampler at every context.
     let alpha = sidak(2 * SAMPLERS.len() * ctxs.len());
@@ -328,7 +334,7 @@ fn learned_sampler_outside_its_grid_samples_as_the_tree() {
     let learned = trained(&lights, &contexts(12), &hidden);
     let tree = LearnedSampler::new(&lights, Vec3A::ZERO, 10.0);
     for p in [Vec3A::new(12.5, 0.0, 0.0), Vec3A::new(0.0, -30.0, 2.0), Vec3A::splat(1e9)] {
-        let ctx = ShadingContext { p, n: Vec3A::Y };
+        let ctx = ShadingContext::new(p, Vec3A::Y);
         for l in 0..lights.len() as u32 {
             assert_eq!(learned.interval(&ctx, LightId(l)), tree.interval(&ctx, LightId(l)), "light {l} at {p:?}");
         }

@@ -274,6 +274,31 @@ fn every_light_at_diffuse_points_agrees_with_all_and_the_tree() {
     }
 }
 
+/// At glossy points the tree weighs clusters by the BSDF's lobe too: point lights that a
+/// near-mirror metal wall reflects towards the camera, and a lamp whose light BSDF rays from
+/// the wall meet (weighed by the pmf of the same lobe-weighted choice), agree with `all`.
+#[test]
+fn lobe_weighted_choice_at_glossy_points_agrees_with_all() {
+    let point = |x: f32, z: f32, intensity: Rgb| LightDesc::Point {
+        name: std::sync::Arc::from("point"),
+        position: Vec3A::new(x, 0.6, z),
+        intensity,
+        lamp: None,
+    };
+    let mut lamps: Vec<_> = [(-1.0, 0.3), (0.1, 0.8), (0.9, -0.2), (-0.3, -0.6)]
+        .iter()
+        .enumerate()
+        .map(|(i, &(x, z))| point(x, z, Rgb::new(0.6, 0.4, 0.3) * (1 + i) as f32))
+        .collect();
+    // A panel between the camera and the wall, facing the wall: the camera sees it mirrored.
+    lamps.push(quad_light(Vec3A::new(-0.6, 0.5, 0.3), Vec3A::X * 0.8, Vec3A::Y * 0.6, Rgb::new(0.5, 1.0, 2.0), true));
+    let scene = floor_and_metal_wall(0.3, lamps);
+    let reference = render_with(&scene, LightSamplerKind::All, 1024, 3, 1);
+    for (kind, seed) in [(LightSamplerKind::Tree, 2), (LightSamplerKind::Cells, 3)] {
+        compare_films(&render_with(&scene, kind, 1024, 3, seed), &reference, sidak(2), kind.name());
+    }
+}
+
 /// Over more than 1024 lights the default's tables choose among clusters of them at diffuse
 /// points and the tree at glossy ones; with both kinds of point on the paths (a diffuse floor,
 /// a glossy metal wall, 1 200 small lamps of three colours close above them) it agrees with

@@ -18,6 +18,10 @@
 //!   with importance = irradiance × the best cosine to the receiver, so a sun below the
 //!   horizon gets no samples and a bright sun is not starved by a fixed share (pbrt gives
 //!   infinite lights a fixed probability).
+//! - **Glossy points weigh clusters by the BSDF too** ([`GlossyLobes`], the min angle from
+//!   the mirror direction to each child's bounding sphere): a point light a glossy floor
+//!   mirrors is chosen as often as it is seen there, not as any light as far away; part of
+//!   each level's choice stays with the irradiance alone ([`IRRADIANCE_SHARE`]).
 //!
 //! `sample` returns `None` only where every cluster has importance 0, which the bounds make
 //! happen only where no light can contribute; the pmf then sums to 0 as well.
@@ -37,7 +41,8 @@ use self::build::{BinNode, Child, Item};
 use self::collapse::{Collapse, Collapsed};
 use self::compact::{Node, Quantizer};
 use super::{LightSampler, SampledLight, ShadingContext, prefetch};
-use crate::light::{Light, LightId};
+use crate::light::{BoundsPacket, Lanes, Light, LightId};
+use crate::material::GlossyLobes;
 use crate::math::Vec3A;
 use crate::math::distribution::{RANGE, Split, even_interval, even_pick, probability};
 
@@ -112,9 +117,30 @@ impl Reweight for AsBuilt {
     }
 }
 
-/// Weights of a node's children at `ctx` (0 for empty slots), reweighted, whether
-/// `reweight` changed them, and how `range` values split among them, with the weights as the
-/// split counts them (`None` when every weight is 0).
+/// At glossy points, the share of each level's choice that stays with the irradiance bounds
+/// alone (the rest follows them weighed by the BSDF's lobes). The lobes' weights come from
+/// bounds, level after level, and a light that is nearly in the lobe can lose a few times at
+/// each level to a sibling cluster whose sphere holds the mirror direction: without this
+/// share one lobby.glb seed in twelve had a point light mirrored by a metal ball chosen ten
+/// times less often than by the plain tree. 0.15, 0.3 and 0.5 gave the same mean relMSE over
+/// twelve seeds (0.044–0.045 against 0.094 without lobes); 0.3 is the middle.
+const IRRADIANCE_SHARE: f32 = 0.3;
+
+/// The children's importances `imp` at a glossy point: the mixture of their shares weighed
+/// by the BSDF's `lobes` and their shares by irradiance alone ([`IRRADIANCE_SHARE`]).
+#[inline(always)]
+fn lobe_weighted(packet: &BoundsPacket, p: Vec3A, lobes: &GlossyLobes, imp: Lanes) -> Lanes {
+    let weighted = imp * packet.lobe_weights(p, lobes);
+    let (by_lobes, alone) = (weighted.reduce_add(), imp.reduce_add());
+    if !(by_lobes > 0.0 && by_lobes.is_finite() && alone > 0.0 && alone.is_finite()) {
+        return imp;
+    }
+    weighted * ((1.0 - IRRADIANCE_SHARE) / by_lobes) + imp * (IRRADIANCE_SHARE / alone)
+}
+
+/// Weights of a node's children at `ctx` (0 for empty slots; weighed by the BSDF's lobes
+/// where `ctx` has them), reweighted, whether `reweight` changed them, and how `range` values
+/// split among them, with the weights as the split counts them (`None` when every weight is 0).
 #[inline(always)]
 fn children_split(
     nodes: &[Node],
@@ -124,7 +150,12 @@ fn children_split(
     range: u128,
     reweight: &impl Reweight,
 ) -> Option<([f32; WIDTH], bool, Split, [f64; WIDTH])> {
-    let mut imp = nodes[node].decode(grid).importance(ctx.p, ctx.n).to_array();
+    let packet = nodes[node].decode(grid);
+    let mut imp = packet.importance(ctx.p, ctx.n);
+    if let Some(lobes) = &ctx.lobes {
+        imp = lobe_weighted(&packet, ctx.p, lobes, imp);
+    }
+    let mut imp = imp.to_array();
     let changed = reweight.reweight(node, &mut imp);
     Split::over(range, &imp).map(|(s, counted)| (imp, changed, s, counted))
 }
@@ -433,7 +464,7 @@ impl LightTree {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::light::{AreaEmission, DistantLight, QuadLight};
+    use crate::light::{AreaEmission, DistantLight, PointLight, QuadLight};
     use crate::math::Rgb;
 
     /// The selection number at fraction `f` of its range.
@@ -468,22 +499,47 @@ mod tests {
         lights.push(Light::Distant(DistantLight { direction: -Vec3A::Y, irradiance: Rgb::ONE }));
         let tree = LightTree::new(&lights);
         assert!(tree.stats().depth <= 12, "{:?}", tree.stats());
-        let ctx = ShadingContext { p: Vec3A::new(1.0, 0.0, 1.0), n: Vec3A::Y };
-        for k in 0..10_000 {
-            let u = at((k as f64 + 0.5) / 10_000.0);
-            let s = tree.sample(&ctx, u).unwrap();
-            assert_eq!(tree.pmf(&ctx, s.light), s.pmf);
-            let (start, end) = tree.interval(&ctx, s.light);
-            assert!(start <= u as u128 && (u as u128) < end);
+        let plain = ShadingContext::new(Vec3A::new(1.0, 0.0, 1.0), Vec3A::Y);
+        // And at a glossy point, whose lobe weighs the clusters too.
+        let mirror = Vec3A::new(0.3, 1.0, 0.2).normalize();
+        let glossy = ShadingContext { lobes: Some(GlossyLobes::new(mirror, 0.3, [(0.7, 0.1), (0.0, 1.0)])), ..plain };
+        for ctx in [plain, glossy] {
+            for k in 0..10_000 {
+                let u = at((k as f64 + 0.5) / 10_000.0);
+                let s = tree.sample(&ctx, u).unwrap();
+                assert_eq!(tree.pmf(&ctx, s.light), s.pmf);
+                let (start, end) = tree.interval(&ctx, s.light);
+                assert!(start <= u as u128 && (u as u128) < end);
+            }
+            // The intervals tile the range.
+            let mut intervals: Vec<_> = (0..lights.len()).map(|i| tree.interval(&ctx, LightId(i as u32))).collect();
+            intervals.sort();
+            assert!(
+                intervals.windows(2).all(|c| c[0].1 == c[1].0)
+                    && intervals[0].0 == 0
+                    && intervals.last().unwrap().1 == RANGE
+            );
         }
-        // The intervals tile the range.
-        let mut intervals: Vec<_> = (0..lights.len()).map(|i| tree.interval(&ctx, LightId(i as u32))).collect();
-        intervals.sort();
-        assert!(
-            intervals.windows(2).all(|c| c[0].1 == c[1].0)
-                && intervals[0].0 == 0
-                && intervals.last().unwrap().1 == RANGE
-        );
+    }
+
+    #[test]
+    fn a_glossy_point_chooses_the_light_its_lobe_mirrors_and_keeps_the_others() {
+        let position = |i: u32| Vec3A::new((i % 8) as f32 - 3.5, 2.0, (i / 8) as f32 - 3.5);
+        let lights: Vec<Light> =
+            (0..64).map(|i| Light::Point(PointLight { position: position(i), intensity: Rgb::ONE })).collect();
+        let tree = LightTree::new(&lights);
+        let plain = ShadingContext::new(Vec3A::new(0.3, 0.0, -0.2), Vec3A::Y);
+        for (target, alpha) in [(27, 0.1), (5, 0.2), (60, 0.05)] {
+            let mirror = (position(target) - plain.p).normalize();
+            let glossy =
+                ShadingContext { lobes: Some(GlossyLobes::new(mirror, 0.1, [(0.9, alpha), (0.0, 1.0)])), ..plain };
+            let (before, after) = (tree.pmf(&plain, LightId(target)), tree.pmf(&glossy, LightId(target)));
+            assert!(after > 3.0 * before, "light {target}, α {alpha}: pmf {before} → {after}");
+            // Every light keeps a share, and the shares still sum to 1.
+            let pmfs: Vec<f32> = (0..64).map(|i| tree.pmf(&glossy, LightId(i))).collect();
+            assert!(pmfs.iter().all(|&p| p > 0.0), "{pmfs:?}");
+            assert!((pmfs.iter().sum::<f32>() - 1.0).abs() < 1e-4);
+        }
     }
 
     #[test]
@@ -492,7 +548,7 @@ mod tests {
         // uniform over all of them, and sample, pmf and intervals agree as everywhere else.
         let lights = equal_lamps(1000, 40, 0.1);
         let tree = LightTree::new(&lights);
-        let far = ShadingContext { p: Vec3A::new(2.0, -500.0, 1.2), n: Vec3A::Y };
+        let far = ShadingContext::new(Vec3A::new(2.0, -500.0, 1.2), Vec3A::Y);
         for k in 0..2000 {
             let u = at((k as f64 + 0.5) / 2000.0);
             let s = tree.sample(&far, u).unwrap();
@@ -501,7 +557,7 @@ mod tests {
             let (start, end) = tree.interval(&far, s.light);
             assert!(start <= u as u128 && (u as u128) < end);
         }
-        let near = ShadingContext { p: Vec3A::new(0.3, 1.9, 0.3), n: Vec3A::Y };
+        let near = ShadingContext::new(Vec3A::new(0.3, 1.9, 0.3), Vec3A::Y);
         for ctx in [far, near] {
             let mut intervals: Vec<_> = (0..lights.len()).map(|i| tree.interval(&ctx, LightId(i as u32))).collect();
             intervals.sort();
@@ -532,7 +588,7 @@ mod tests {
         for (a, b) in one.nodes.iter().zip(&three.nodes) {
             assert_eq!(a.children, b.children);
         }
-        let ctx = ShadingContext { p: Vec3A::new(1.0, 0.0, 1.0), n: Vec3A::Y };
+        let ctx = ShadingContext::new(Vec3A::new(1.0, 0.0, 1.0), Vec3A::Y);
         for k in 0..100 {
             let u = at((k as f64 + 0.5) / 100.0);
             assert_eq!(one.sample(&ctx, u), three.sample(&ctx, u));
@@ -550,10 +606,10 @@ mod tests {
     fn a_single_light_is_a_tree() {
         let lights = grid(1);
         let tree = LightTree::new(&lights);
-        let ctx = ShadingContext { p: Vec3A::ZERO, n: Vec3A::Y };
+        let ctx = ShadingContext::new(Vec3A::ZERO, Vec3A::Y);
         assert_eq!(tree.sample(&ctx, at(0.3)), Some(SampledLight { light: LightId(0), pmf: 1.0 }));
         // Below the horizon: nothing to sample.
-        let under = ShadingContext { p: Vec3A::new(0.0, 3.0, 0.0), n: Vec3A::Y };
+        let under = ShadingContext::new(Vec3A::new(0.0, 3.0, 0.0), Vec3A::Y);
         assert_eq!(tree.sample(&under, at(0.3)), None);
         assert_eq!(tree.pmf(&under, LightId(0)), 0.0);
     }
