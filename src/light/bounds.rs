@@ -236,9 +236,7 @@ impl BoundsPacket {
         }
         select(self.infinite, infinite, importance)
     }
-}
 
-impl BoundsPacket {
     /// What a glossy BSDF at `p` sends towards each lane's lights: `lobes`' weight at the
     /// smallest angle between its mirror direction and a direction into the lane's bounding
     /// sphere (for directional lanes, into their cone of directions), so at least its weight
