@@ -673,4 +673,25 @@ mod tests {
         assert!(layered.chooses_lobes());
         assert_ne!(directions(&layered, 0.01), directions(&layered, 0.99));
     }
+
+    #[test]
+    fn glossy_lobes_mirror_the_viewer_and_skip_lambert_and_glass() {
+        let n = Vec3A::Z;
+        let wo = Vec3A::new(0.3, 0.1, 1.0).normalize();
+        let at = |bsdf: Bsdf| ShadingPoint::new(bsdf, n, n, None, wo).glossy_lobes();
+        let metal = Principled::new(Rgb::splat(0.9), 1.0, 0.3, 1.5, 0.5, Rgb::ONE);
+        let lobes = at(Bsdf::Principled(metal)).expect("metal is glossy");
+        assert!((lobes.mirror - Vec3A::new(-wo.x, -wo.y, wo.z)).length() < 1e-5, "{}", lobes.mirror);
+        assert!(lobes.diffuse < 1e-6 && (lobes.glossy[0].0 - 1.0).abs() < 1e-5, "{lobes:?}");
+        assert!((lobes.glossy[0].1 - 0.09f32.powi(2)).abs() < 1e-7, "α² of roughness 0.3: {lobes:?}");
+        // A dielectric splits its energy between the diffuse base and the specular layer, and
+        // a coat adds its own lobe.
+        let plastic = Principled::new(Rgb::splat(0.8), 0.0, 0.2, 1.5, 0.5, Rgb::ONE).with_coat(1.0, 0.05);
+        let lobes = at(Bsdf::Principled(plastic)).expect("a coated dielectric is glossy");
+        assert!(lobes.diffuse > 0.3 && lobes.glossy[0].0 > 0.0 && lobes.glossy[1].0 > 0.0, "{lobes:?}");
+        assert!((lobes.diffuse + lobes.glossy[0].0 + lobes.glossy[1].0 - 1.0).abs() < 1e-4, "{lobes:?}");
+        assert_eq!(at(Bsdf::Diffuse(Diffuse { albedo: Rgb::splat(0.5) })), None);
+        let glass = Principled::new(Rgb::ONE, 0.0, 0.1, 1.5, 0.5, Rgb::ONE).with_transmission(1.0, 1.5);
+        assert_eq!(at(Bsdf::Principled(glass)), None);
+    }
 }
