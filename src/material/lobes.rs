@@ -5,10 +5,10 @@
 //! point light mirrored by a glossy floor the probability of any light as far away, and the
 //! rare sample that chooses it carries the lobe's peak divided by that probability: the
 //! glossy-floor fireflies of `lobby.glb`. Weighing each cluster also by the BSDF towards it,
-//! as Tokuyoshi & Harada 2023 (hierarchical light sampling with spherical Gaussians) do with
-//! their lobe approximation, moves those samples where the BSDF sends them. Any positive
-//! weight keeps the estimate unbiased (the pmf is computed as realised); a closer one only
-//! lowers its variance.
+//! as Tokuyoshi et al. 2023 (hierarchical light sampling with accurate spherical Gaussian
+//! lighting) do with their lobe approximation, moves those samples where the BSDF sends
+//! them. Any positive weight keeps the estimate unbiased (the pmf is computed as realised);
+//! a closer one only lowers its variance.
 
 use crate::math::Vec3A;
 use std::f32::consts::FRAC_1_PI;
