@@ -1,6 +1,6 @@
 //! What light selection may know of a BSDF that is not Lambert's: where it reflects most.
 //!
-//! Owns: [`GlossyLobes`] and its value per direction, [`GlossyLobes::weight`]. A light tree
+//! Owns: [`GlossyLobes`] and its weights towards clusters, [`GlossyLobes::weights`]. A light tree
 //! that weighs clusters only by the irradiance they can bring (Conty Estevez & Kulla) gives a
 //! point light mirrored by a glossy floor the probability of any light as far away, and the
 //! rare sample that chooses it carries the lobe's peak divided by that probability: the

@@ -19,7 +19,7 @@ pub mod tables;
 pub mod texture;
 
 pub use diffuse::Diffuse;
-pub use lobes::{GlossyLobes, MIN_SELECTION_ALPHA};
+pub use lobes::GlossyLobes;
 pub use microfacet::Ggx;
 pub use principled::{Principled, PrincipledAt};
 pub use texture::{Image, TextureRef};
