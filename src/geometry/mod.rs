@@ -18,7 +18,7 @@ mod triangles;
 pub use accel::{Accel, AccelStats, Blas, BoxBvh, Instance, TracerKind};
 pub use hit::{RawHit, SurfaceHit, TriangleRef};
 pub use mesh::{Attributes, Corners, Geometry, GeometryBuilder, NO_LIGHT, TriangleInfo, radial_tangents};
-pub use offset::offset_ray_origin;
+pub use offset::{offset_ray_origin, offset_toward};
 
 use crate::math::Vec3A;
 

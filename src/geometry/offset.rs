@@ -24,6 +24,13 @@ pub fn offset_ray_origin(p: Vec3A, n: Vec3A) -> Vec3A {
     Vec3A::new(step(p.x, of.x, n.x), step(p.y, of.y, n.y), step(p.z, of.z, n.z))
 }
 
+/// `p` nudged off its surface (unit geometric normal `n`, either orientation) towards the side
+/// `dir` points into: where a ray leaving `p` along `dir` starts.
+#[inline]
+pub fn offset_toward(p: Vec3A, n: Vec3A, dir: Vec3A) -> Vec3A {
+    offset_ray_origin(p, if dir.dot(n) >= 0.0 { n } else { -n })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

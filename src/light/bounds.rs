@@ -138,6 +138,29 @@ fn mask_lane(b: bool) -> f32 {
     if b { f32::from_bits(u32::MAX) } else { 0.0 }
 }
 
+/// A packet's bounding spheres seen from a point `p`: the offsets d = p − centre, |d|² and
+/// 1/|d| (0 at the centre), the radii, and the cosine and sine of the half-angle each sphere
+/// subtends (θb = π from inside it).
+#[derive(Clone, Copy)]
+struct Seen {
+    dx: Lanes,
+    dy: Lanes,
+    dz: Lanes,
+    dist2: Lanes,
+    inv_dist: Lanes,
+    r: Lanes,
+    cos_b: Lanes,
+    sin_b: Lanes,
+}
+
+impl Seen {
+    /// sin θ · |d| for the angle θ between `d` and a unit vector whose dot with `d` is `a_d`.
+    #[inline(always)]
+    fn sin_times_dist(&self, a_d: Lanes) -> Lanes {
+        max(self.dist2 - a_d * a_d, Lanes::ZERO).sqrt()
+    }
+}
+
 impl BoundsPacket {
     /// A packet of up to [`LANES`] bounds.
     pub fn new(bounds: &[LightBounds]) -> Self {
@@ -171,6 +194,22 @@ impl BoundsPacket {
         }
     }
 
+    /// The lanes' bounding spheres as seen from `p`: what both the importance and a glossy
+    /// BSDF's weights towards them start from.
+    #[inline(always)]
+    fn seen_from(&self, p: Vec3A) -> Seen {
+        let splat = Lanes::splat;
+        let (dx, dy, dz) = (splat(p.x) - self.cx, splat(p.y) - self.cy, splat(p.z) - self.cz);
+        let dist2 = dx * dx + dy * dy + dz * dz;
+        let inv_dist = select(dist2.cmp_gt(Lanes::ZERO), Lanes::ONE / dist2.sqrt(), Lanes::ZERO);
+        // Half-angle subtended by the bounding sphere (θb = π inside it): sin θb = r/d.
+        let inside = dist2.cmp_le(self.r2);
+        let r = self.r2.sqrt();
+        let sin_b = select(inside, Lanes::ZERO, r * inv_dist);
+        let cos_b = select(inside, splat(-1.0), max(dist2 - self.r2, Lanes::ZERO).sqrt() * inv_dist);
+        Seen { dx, dy, dz, dist2, inv_dist, r, cos_b, sin_b }
+    }
+
     /// Importance of each lane at point `p` with unit normal `n` (zero vector: not on a
     /// surface): an upper estimate of the irradiance the cluster can deliver, 0 only when no
     /// light in it can reach `p` from above its horizon.
@@ -181,28 +220,32 @@ impl BoundsPacket {
     /// side instead of one after another.
     #[inline]
     pub fn importance(&self, p: Vec3A, n: Vec3A) -> Lanes {
+        self.importance_seen(&self.seen_from(p), n)
+    }
+
+    /// [`importance`](Self::importance) and, for a glossy BSDF at `p`, its
+    /// [`lobe_weights`](Self::lobe_weights), from one view of the spheres.
+    #[inline]
+    pub fn importance_and_lobe_weights(&self, p: Vec3A, n: Vec3A, lobes: &GlossyLobes) -> (Lanes, Lanes) {
+        let seen = self.seen_from(p);
+        (self.importance_seen(&seen, n), self.lobe_weights_seen(&seen, lobes))
+    }
+
+    #[inline(always)]
+    fn importance_seen(&self, seen: &Seen, n: Vec3A) -> Lanes {
         let splat = Lanes::splat;
-        let (dx, dy, dz) = (splat(p.x) - self.cx, splat(p.y) - self.cy, splat(p.z) - self.cz);
-        let dist2 = dx * dx + dy * dy + dz * dz;
+        let Seen { dx, dy, dz, dist2, inv_dist, r, cos_b, sin_b } = *seen;
         // Squared-length clamp (change 1 above): a receiver inside the cluster sees it at ≥ r/2.
         // (and 1e-12 m² keeps a receiver exactly at a point light finite).
         let d2 = max(max(dist2, splat(0.25) * self.r2), splat(1e-12));
         let phi_over_d2 = self.phi / d2;
-        let inv_dist = select(dist2.cmp_gt(Lanes::ZERO), Lanes::ONE / dist2.sqrt(), Lanes::ZERO);
-        // sin θ · |d| for the angle θ between `d` and a unit vector whose dot with `d` is `a_d`.
-        let sin_times_dist = |a_d: Lanes| max(dist2 - a_d * a_d, Lanes::ZERO).sqrt();
-        // Half-angle subtended by the bounding sphere (θb = π inside it): sin θb = r/d.
-        let inside = dist2.cmp_le(self.r2);
-        let r = self.r2.sqrt();
-        let sin_b = select(inside, Lanes::ZERO, r * inv_dist);
-        let cos_b = select(inside, splat(-1.0), max(dist2 - self.r2, Lanes::ZERO).sqrt() * inv_dist);
         // Every emitting point q is between d − r and d + r from p (change 5 above).
         let dist = dist2 * inv_dist;
         let inv_near = Lanes::ONE / max(dist - r, splat(1e-30));
         // The angle θw between the cone axis and the direction from the cluster towards p.
         let mut w_d = self.wx * dx + self.wy * dy + self.wz * dz;
         w_d = select(self.two_sided, w_d.abs(), w_d);
-        let (cos_w, sin_w) = (w_d * inv_dist, sin_times_dist(w_d) * inv_dist);
+        let (cos_w, sin_w) = (w_d * inv_dist, seen.sin_times_dist(w_d) * inv_dist);
         // θ' = max(0, θw − θo − θb): the smallest angle between an emitter normal and the
         // direction towards p. sin(θw − θo) comes from the difference formula, not a root.
         let cos_x = cos_sub_clamped(cos_w, sin_w, self.cos_o, self.sin_o);
@@ -222,7 +265,7 @@ impl BoundsPacket {
             let (nx, ny, nz) = (splat(n.x), splat(n.y), splat(n.z));
             // Signed horizon test (change 3 above): θi' = max(0, θi − θb), zero when ≥ 90°.
             let n_d = nx * dx + ny * dy + nz * dz;
-            let (cos_i, sin_i) = (-n_d * inv_dist, sin_times_dist(n_d) * inv_dist);
+            let (cos_i, sin_i) = (-n_d * inv_dist, seen.sin_times_dist(n_d) * inv_dist);
             // And through the box: n·(q − p) is at most n·(c − p) plus its half extents along
             // |n|; where that is ≤ 0 the whole box is below the horizon.
             let n_h = self.hx * nx.abs() + self.hy * ny.abs() + self.hz * nz.abs() - n_d;
@@ -241,20 +284,20 @@ impl BoundsPacket {
     /// smallest angle between its mirror direction and a direction into the lane's bounding
     /// sphere (for directional lanes, into their cone of directions), so at least its weight
     /// towards any light of the lane.
-    #[inline]
-    pub fn lobe_weights(&self, p: Vec3A, lobes: &GlossyLobes) -> Lanes {
+    #[cfg(test)]
+    fn lobe_weights(&self, p: Vec3A, lobes: &GlossyLobes) -> Lanes {
+        self.lobe_weights_seen(&self.seen_from(p), lobes)
+    }
+
+    #[inline(always)]
+    fn lobe_weights_seen(&self, seen: &Seen, lobes: &GlossyLobes) -> Lanes {
         let splat = Lanes::splat;
-        let (dx, dy, dz) = (splat(p.x) - self.cx, splat(p.y) - self.cy, splat(p.z) - self.cz);
-        let dist2 = dx * dx + dy * dy + dz * dz;
-        let inv_dist = select(dist2.cmp_gt(Lanes::ZERO), Lanes::ONE / dist2.sqrt(), Lanes::ZERO);
+        let Seen { dx, dy, dz, inv_dist, cos_b, sin_b, .. } = *seen;
         let (mx, my, mz) = (splat(lobes.mirror.x), splat(lobes.mirror.y), splat(lobes.mirror.z));
         // The angle between the mirror direction and the direction towards the centre, less
         // the half-angle the bounding sphere subtends (all of it from inside the sphere).
         let m_d = mx * dx + my * dy + mz * dz;
-        let (cos_m, sin_m) = (-m_d * inv_dist, max(dist2 - m_d * m_d, Lanes::ZERO).sqrt() * inv_dist);
-        let inside = dist2.cmp_le(self.r2);
-        let sin_b = select(inside, Lanes::ZERO, self.r2.sqrt() * inv_dist);
-        let cos_b = select(inside, splat(-1.0), max(dist2 - self.r2, Lanes::ZERO).sqrt() * inv_dist);
+        let (cos_m, sin_m) = (-m_d * inv_dist, seen.sin_times_dist(m_d) * inv_dist);
         let finite = cos_sub_clamped(cos_m, sin_m, cos_b, sin_b);
         let cos_w = mx * self.wx + my * self.wy + mz * self.wz;
         let infinite = cos_sub_clamped(cos_w, sin_from_cos(cos_w), self.cos_o, self.sin_o);

@@ -28,7 +28,7 @@ pub struct GlossyLobes {
     /// Share of the reflected energy that is diffuse (Lambert's lobe, the sheen).
     pub diffuse: f32,
     /// Each glossy lobe's share and squared GGX width α² (α at least
-    /// [`MIN_SELECTION_ALPHA`]; a share of 0 for an absent lobe).
+    /// `MIN_SELECTION_ALPHA`, 0.02; a share of 0 for an absent lobe).
     pub glossy: [(f32, f32); 2],
 }
 
@@ -61,7 +61,8 @@ impl GlossyLobes {
     }
 
     /// [`weights`](Self::weights) for one direction to a light of no extent.
-    pub fn weight(&self, cos_theta: f32) -> f32 {
+    #[cfg(test)]
+    pub(crate) fn weight(&self, cos_theta: f32) -> f32 {
         self.weights(f32x8::splat(cos_theta), f32x8::ZERO).as_array_ref()[0]
     }
 }

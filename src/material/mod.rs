@@ -604,7 +604,7 @@ impl ShadingPoint {
     /// Where a ray leaving `p` along `wi` starts: off the surface on `wi`'s side.
     #[inline]
     pub fn ray_origin(&self, p: Vec3A, wi: Vec3A) -> Vec3A {
-        crate::geometry::offset_ray_origin(p, if wi.dot(self.n_geom) >= 0.0 { self.n_geom } else { -self.n_geom })
+        crate::geometry::offset_toward(p, self.n_geom, wi)
     }
 
     /// The normal light selection weighs lights by (their horizon): none for surfaces that

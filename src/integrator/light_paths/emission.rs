@@ -15,7 +15,7 @@
 //! whole path (the weights are computed from the same density on both sides), so no light is
 //! lost either way.
 
-use crate::geometry::{Ray, offset_ray_origin};
+use crate::geometry::{Ray, offset_toward};
 use crate::light::Light;
 use crate::math::{UVec2, Vec2, Vec3A, luminance, warp};
 use crate::scene::Scene;
@@ -96,13 +96,13 @@ fn probe_ray(scene: &Scene, origin: Vec3A, dir: Vec3A, resolution: UVec2) -> Opt
 fn lands_in_view(scene: &Scene, hit: &crate::geometry::SurfaceHit, dir: Vec3A, resolution: UVec2) -> bool {
     let n = if hit.n_shading.dot(dir) > 0.0 { -hit.n_shading } else { hit.n_shading };
     let mirrored = dir - 2.0 * dir.dot(n) * n;
-    let start = offset_ray_origin(hit.p, if mirrored.dot(hit.n_geom) >= 0.0 { hit.n_geom } else { -hit.n_geom });
+    let start = offset_toward(hit.p, hit.n_geom, mirrored);
     let Some(seen) = scene.intersect(&Ray::new(start, mirrored), f32::INFINITY) else { return false };
     if scene.camera.project(seen.p, resolution).is_none() {
         return false;
     }
     let to_camera = scene.camera.position() - seen.p;
-    let from = offset_ray_origin(seen.p, if to_camera.dot(seen.n_geom) >= 0.0 { seen.n_geom } else { -seen.n_geom });
+    let from = offset_toward(seen.p, seen.n_geom, to_camera);
     !scene.occluded(&Ray::new(from, scene.camera.position() - from), 1.0)
 }
 

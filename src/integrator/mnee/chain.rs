@@ -9,7 +9,7 @@ use glam::DVec3;
 
 use super::super::{RayCounters, transmittance};
 use super::MAX_CASTERS;
-use crate::geometry::{Ray, SurfaceHit, TriangleRef, offset_ray_origin};
+use crate::geometry::{Ray, SurfaceHit, TriangleRef, offset_toward};
 use crate::material::SmoothGlass;
 use crate::math::{Rgb, Vec3A};
 use crate::scene::Scene;
@@ -308,7 +308,7 @@ fn ray_to(origin: Vec3A, end: End) -> (Ray, f32) {
 /// the side it heads to, and how far along it the light is.
 pub(super) fn ray_from_surface(from: Vec3A, n: Vec3A, end: End) -> (Ray, f32) {
     let towards = to_f32(end.seen_from(to_f64(from)));
-    ray_to(offset_ray_origin(from, if towards.dot(n) >= 0.0 { n } else { -n }), end)
+    ray_to(offset_toward(from, n, towards), end)
 }
 
 /// The smooth glass `hit` is on, if it is.
@@ -502,8 +502,7 @@ pub(super) fn passage(chain: &Chain) -> (Rgb, f32) {
 /// emissive surface ends: just off the surface on `p`'s side. A function of the two points
 /// alone: BSDF sampling asks the connection whether it would have found a path it found.
 pub(super) fn surface_end(p: Vec3A, y: Vec3A, n_y: Vec3A) -> End {
-    let toward = y - p;
-    End::Point(to_f64(offset_ray_origin(y, if toward.dot(n_y) > 0.0 { -n_y } else { n_y })))
+    End::Point(to_f64(offset_toward(y, n_y, p - y)))
 }
 
 /// What the straight way from the receiver at `p` (geometric normal `n_p`) to the light at
@@ -511,7 +510,7 @@ pub(super) fn surface_end(p: Vec3A, y: Vec3A, n_y: Vec3A) -> End {
 /// solved from them.
 pub(super) fn walk(scene: &Scene, p: Vec3A, n_p: Vec3A, end: End, most: usize, counters: &mut RayCounters) -> Straight {
     let towards = to_f32(end.seen_from(to_f64(p)));
-    let origin = offset_ray_origin(p, if towards.dot(n_p) >= 0.0 { n_p } else { -n_p });
+    let origin = offset_toward(p, n_p, towards);
     match seed(scene, p, origin, end, most, counters) {
         Straight::Glass(Some(chain)) => {
             Straight::Glass(solve_chain(scene, chain, origin, counters).filter(refracts_everywhere))

@@ -18,7 +18,7 @@
 //!   with importance = irradiance × the best cosine to the receiver, so a sun below the
 //!   horizon gets no samples and a bright sun is not starved by a fixed share (pbrt gives
 //!   infinite lights a fixed probability).
-//! - **Glossy points weigh clusters by the BSDF too** ([`GlossyLobes`], the min angle from
+//! - **Glossy points weigh clusters by the BSDF too** ([`GlossyLobes`](crate::material::GlossyLobes), the min angle from
 //!   the mirror direction to each child's bounding sphere): a point light a glossy floor
 //!   mirrors is chosen as often as it is seen there, not as any light as far away; part of
 //!   each level's choice stays with the irradiance alone ([`IRRADIANCE_SHARE`]).
@@ -41,8 +41,7 @@ use self::build::{BinNode, Child, Item};
 use self::collapse::{Collapse, Collapsed};
 use self::compact::{Node, Quantizer};
 use super::{LightSampler, SampledLight, ShadingContext, prefetch};
-use crate::light::{BoundsPacket, Lanes, Light, LightId};
-use crate::material::GlossyLobes;
+use crate::light::{Lanes, Light, LightId};
 use crate::math::Vec3A;
 use crate::math::distribution::{RANGE, Split, even_interval, even_pick, probability};
 
@@ -126,11 +125,12 @@ impl Reweight for AsBuilt {
 /// twelve seeds (0.044–0.045 against 0.094 without lobes); 0.3 is the middle.
 const IRRADIANCE_SHARE: f32 = 0.3;
 
-/// The children's importances `imp` at a glossy point: the mixture of their shares weighed
-/// by the BSDF's `lobes` and their shares by irradiance alone ([`IRRADIANCE_SHARE`]).
+/// The children's importances `imp` at a glossy point, mixed from their shares weighed by
+/// the BSDF's lobes (`lobe_weights`) and their shares by irradiance alone
+/// ([`IRRADIANCE_SHARE`]).
 #[inline(always)]
-fn lobe_weighted(packet: &BoundsPacket, p: Vec3A, lobes: &GlossyLobes, imp: Lanes) -> Lanes {
-    let weighted = imp * packet.lobe_weights(p, lobes);
+fn lobe_weighted(imp: Lanes, lobe_weights: Lanes) -> Lanes {
+    let weighted = imp * lobe_weights;
     let (by_lobes, alone) = (weighted.reduce_add(), imp.reduce_add());
     if !(by_lobes > 0.0 && by_lobes.is_finite() && alone > 0.0 && alone.is_finite()) {
         return imp;
@@ -151,10 +151,13 @@ fn children_split(
     reweight: &impl Reweight,
 ) -> Option<([f32; WIDTH], bool, Split, [f64; WIDTH])> {
     let packet = nodes[node].decode(grid);
-    let mut imp = packet.importance(ctx.p, ctx.n);
-    if let Some(lobes) = &ctx.lobes {
-        imp = lobe_weighted(&packet, ctx.p, lobes, imp);
-    }
+    let imp = match &ctx.lobes {
+        None => packet.importance(ctx.p, ctx.n),
+        Some(lobes) => {
+            let (imp, weights) = packet.importance_and_lobe_weights(ctx.p, ctx.n, lobes);
+            lobe_weighted(imp, weights)
+        }
+    };
     let mut imp = imp.to_array();
     let changed = reweight.reweight(node, &mut imp);
     Split::over(range, &imp).map(|(s, counted)| (imp, changed, s, counted))
@@ -465,6 +468,7 @@ impl LightTree {
 mod tests {
     use super::*;
     use crate::light::{AreaEmission, DistantLight, PointLight, QuadLight};
+    use crate::material::GlossyLobes;
     use crate::math::Rgb;
 
     /// The selection number at fraction `f` of its range.
