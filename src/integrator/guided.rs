@@ -24,7 +24,7 @@ pub const MIN_ROUGHNESS: f32 = 0.05;
 #[derive(Clone, Copy, Debug)]
 pub struct Scattering<'a> {
     /// The BSDF at the point.
-    pub sp: ShadingPoint,
+    pub sp: &'a ShadingPoint,
     /// The learned distribution and the share α of directions it draws.
     guide: Option<(&'a Directions, f32)>,
     /// Whether the render guides and the BSDF is rough enough to be guided here (where a
@@ -35,7 +35,7 @@ pub struct Scattering<'a> {
 impl<'a> Scattering<'a> {
     /// Scattering at point `p` of `sp`, guided by `guide` where it has learned something.
     #[inline]
-    pub fn new(sp: ShadingPoint, p: Vec3A, guide: Option<&'a Guide>) -> Self {
+    pub fn new(sp: &'a ShadingPoint, p: Vec3A, guide: Option<&'a Guide>) -> Self {
         let Some(g) = guide else { return Self { sp, guide: None, guidable: false } };
         let roughness = sp.mean_roughness();
         let guidable = roughness >= MIN_ROUGHNESS;

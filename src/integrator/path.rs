@@ -321,7 +321,7 @@ impl Tracer<'_> {
             let entering = ray.dir.dot(hit.n_geom) < 0.0;
             let Some(surface) = Surface::at(scene, material, &hit, entering, as_smooth) else { break };
             let sp = surface.seen_from(wo);
-            let scattering = Scattering::new(sp, hit.p, guide);
+            let scattering = Scattering::new(&sp, hit.p, guide);
             // Light paths sample camera → x1 → glossy x2 → point or spot light too.
             let highlight = light_paths.and_then(|paths| match (depth, x1, prev) {
                 (0, ..) => {

@@ -128,7 +128,7 @@ fn the_guided_mixture_samples_what_its_density_says() {
     ];
     for (label, bsdf) in bsdfs {
         let sp = ShadingPoint::new(bsdf, Vec3A::Z, Vec3A::Z, None, wo);
-        let s = Scattering::new(sp, Vec3A::ZERO, Some(guide));
+        let s = Scattering::new(&sp, Vec3A::ZERO, Some(guide));
         let draw = |k: usize| s.sample(&SampleStream::new(11, k as u64, 0), 0).map(|b| b.wi);
         // Every draw reports the mixture's density and the weight f·cos/pdf.
         for k in 0..500 {
