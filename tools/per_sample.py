@@ -4,6 +4,7 @@ machine whose timings wander by ±10 % from run to run.
 
     python3 tools/per_sample.py SCENE REFERENCE.exr [--samplers power,cells] [--spp 64]
         [--seeds 16] [--resolution 160x120] [--myriad target/release/myriad] [--flags '...']
+        [--misses]
 
 For each sampler: relMSE · spp at `--spp` samples over `--seeds` seeds (`myriad compare`
 against REFERENCE, which must be a converged render at the same resolution), the spread of
@@ -12,9 +13,11 @@ the seeds' values (a heavy tail there is fireflies), the same without each image
 decide), and the instructions one sample costs, counted by `valgrind --tool=cachegrind` on one thread as the difference between a 12-spp
 and a 4-spp render (so loading, building and writing cancel out). Their product is the
 instructions a sample spends for a given error; a lower one is a more efficient sampler as
-far as instruction counts go (cache misses are not counted: check with an equal-time run,
-`tools/equal_time.py`, where the machine is quiet). Only the Python standard library and
-valgrind are used.
+far as instruction counts go. Cache misses are not in it: `--misses` also counts, with
+cachegrind's cache model, the misses a sample takes in a 32 KiB first-level cache and in a
+512 KiB last level (one core's L2 on the development machines), where a scene whose data
+outgrows the L2 spends its time; or check with an equal-time run, `tools/equal_time.py`,
+where the machine is quiet. Only the Python standard library and valgrind are used.
 """
 
 import argparse
@@ -29,15 +32,29 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def instructions(myriad, scene, sampler, spp, resolution, flags):
-    cmd = ["valgrind", "--tool=cachegrind", "--cache-sim=no", "--cachegrind-out-file=/dev/null", myriad,
+#: cachegrind's cache model for `--misses`: a 32 KiB, 8-way first-level data cache and a
+#: 512 KiB, 8-way last level (one core's L2), 64-byte lines.
+CACHES = ["--cache-sim=yes", "--D1=32768,8,64", "--LL=524288,8,64"]
+
+
+def costs(myriad, scene, sampler, spp, resolution, flags, misses=False):
+    """Instructions of a one-thread render (and, with `misses`, its data misses in the first
+    level and in the L2-sized last level): a tuple."""
+    sim = CACHES if misses else ["--cache-sim=no"]
+    cmd = ["valgrind", "--tool=cachegrind", *sim, "--cachegrind-out-file=/dev/null", myriad,
            "render", scene, "--spp", str(spp), "--resolution", resolution, "--threads", "1",
            "--sampler", sampler, "-o", str(Path(tempfile.gettempdir()) / "per-sample.exr"), "-q", *flags]
     err = subprocess.run(cmd, capture_output=True, text=True, check=True).stderr
-    refs = re.search(r"I\s+refs:\s+([\d,]+)", err)
-    if not refs:
-        sys.exit(f"no instruction count in valgrind's output:\n{err}")
-    return int(refs.group(1).replace(",", ""))
+    keys = [r"I\s+refs", r"D1\s+misses", r"LLd\s+misses"] if misses else [r"I\s+refs"]
+    found = [re.search(k + r":\s+([\d,]+)", err) for k in keys]
+    if not all(found):
+        sys.exit(f"no counts in valgrind's output:\n{err}")
+    return tuple(int(m.group(1).replace(",", "")) for m in found)
+
+
+def instructions(myriad, scene, sampler, spp, resolution, flags):
+    """Instructions of a one-thread render of `spp` samples per pixel."""
+    return costs(myriad, scene, sampler, spp, resolution, flags)[0]
 
 
 def main():
@@ -50,6 +67,8 @@ def main():
     ap.add_argument("--resolution", default="160x120")
     ap.add_argument("--myriad", default=str(ROOT / "target/release/myriad"))
     ap.add_argument("--flags", default="", help="more options for every render, e.g. '--max-memory 6'")
+    ap.add_argument("--misses", action="store_true",
+                    help="also count data cache misses a sample (first level, and an L2-sized last level)")
     args = ap.parse_args()
     flags = shlex.split(args.flags)
     if not Path(args.myriad).exists():
@@ -60,23 +79,25 @@ def main():
                         "--seeds", str(args.seeds), "--resolution", args.resolution, "--reference", args.reference,
                         "--out-dir", out, "-q", *flags], check=True, stdout=subprocess.DEVNULL)
         report = json.loads((Path(out) / "report.json").read_text())
+    miss_heads = " | L1 misses a sample | L2 misses a sample" if args.misses else ""
     print(f"| sampler | relMSE · spp (mean of {args.seeds} seeds) | seeds, lowest – highest | instructions a sample "
-          "| product, ÷ the lowest | relMSE · spp, 99.9 % of pixels | its product, ÷ the lowest |")
-    print("|---|---:|---:|---:|---:|---:|---:|")
+          f"| product, ÷ the lowest | relMSE · spp, 99.9 % of pixels | its product, ÷ the lowest{miss_heads} |")
+    print("|---|---:|---:|---:|---:|---:|---:|" + ("---:|---:|" if args.misses else ""))
     rows = []
     for s in report["samplers"]:
         errors = sorted(r["rel_mse"] * args.spp for r in s["runs"])
-        a = instructions(args.myriad, args.scene, s["sampler"], 4, args.resolution, flags)
-        b = instructions(args.myriad, args.scene, s["sampler"], 12, args.resolution, flags)
-        per_sample = (b - a) / (w * h * 8)
+        a = costs(args.myriad, args.scene, s["sampler"], 4, args.resolution, flags, args.misses)
+        b = costs(args.myriad, args.scene, s["sampler"], 12, args.resolution, flags, args.misses)
+        per_sample = [(y - x) / (w * h * 8) for x, y in zip(a, b)]
         trimmed = s["rel_mse_trimmed"]["mean"] * args.spp
         rows.append((s["sampler"], s["rel_mse"]["mean"] * args.spp, errors, per_sample, trimmed))
-    best = min(e * i for _, e, _, i, _ in rows)
-    best_trimmed = min(t * i for _, _, _, i, t in rows)
-    for name, e, errors, i, t in rows:
+    best = min(e * c[0] for _, e, _, c, _ in rows)
+    best_trimmed = min(t * c[0] for _, _, _, c, t in rows)
+    for name, e, errors, c, t in rows:
+        i = c[0]
+        misses = "".join(f" | {m:.1f}" for m in c[1:])
         print(f"| {name} | {e:.4g} | {errors[0]:.4g} – {errors[-1]:.4g} | {i:.0f} | {e * i / best:.2f} "
-              f"| {t:.4g} | {t * i / best_trimmed:.2f} |")
-
+              f"| {t:.4g} | {t * i / best_trimmed:.2f}{misses} |")
 
 if __name__ == "__main__":
     main()
