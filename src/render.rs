@@ -253,7 +253,8 @@ fn render_pass(pass: &Pass, film: &mut Film, recording: &Seen, watch: Watch) -> 
     let Pass { scene, strategy, guide, light_paths, settings, first, count } = *pass;
     let caustics = scene.caustics && settings.caustics;
     let (max_depth, clamp) = (settings.max_depth, settings.clamp);
-    let tracer = path::Tracer { scene, strategy, guide, max_depth, clamp, caustics, light_paths };
+    let first_hits = film.has_first_hit();
+    let tracer = path::Tracer { scene, strategy, guide, max_depth, clamp, caustics, light_paths, first_hits };
     let size = settings.resolution;
     let (bands, splat_sums) = film.bands_mut(ROWS_PER_BAND);
     let bands: Vec<_> = bands.collect();

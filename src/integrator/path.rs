@@ -267,12 +267,15 @@ pub struct Tracer<'a> {
     /// them: what next-event estimation of point and spot lights at glossy second vertices is
     /// weighed against.
     pub light_paths: Option<&'a LightPaths>,
+    /// Whether paths report their first hit (the film keeps AOVs): its albedo is a texture
+    /// lookup a camera ray would otherwise pay for nothing.
+    pub first_hits: bool,
 }
 
 impl Tracer<'_> {
     /// Radiance arriving along `ray` (a camera ray).
     pub fn radiance(&self, mut ray: Ray, stream: &SampleStream, tally: &mut Tally) -> PathSample {
-        let Tracer { scene, strategy, guide, max_depth, clamp, caustics, light_paths } = *self;
+        let Tracer { scene, strategy, guide, max_depth, clamp, caustics, light_paths, first_hits } = *self;
         let mut l = Rgb::ZERO;
         let mut first_hit = None;
         let mut beta = Rgb::ONE;
@@ -307,7 +310,7 @@ impl Tracer<'_> {
                 beta *= transmittance(medium, hit.t * ray.dir.length());
             }
             let wo = -ray.dir.normalize();
-            if depth == 0 {
+            if depth == 0 && first_hits {
                 first_hit = Some(FirstHit::of(scene, &hit, wo));
             }
             l += clamped(emitted(scene, strategy, &hit, ray.dir, prev, chain, beta, counters), arriving);
