@@ -111,8 +111,9 @@ fn light_contribution(
     unshadowed * weight
 }
 
-/// Direct light reflected towards the viewer of `scattering` at surface point `p` (inside a
-/// volume of absorption `medium`, zero outside), estimated with `strategy` and weighed
+/// Direct light reflected towards the viewer of `scattering` at the surface point of `ctx`
+/// (its light-selection context; inside a volume of absorption `medium`, zero outside),
+/// estimated with `strategy` and weighed
 /// against the density `scattering` samples directions with, and for point and spot lights
 /// against light paths where they sample the same path (`highlight`); also through smooth
 /// glass, as `glass` allows.
@@ -122,7 +123,7 @@ pub fn estimate_direct(
     scene: &Scene,
     strategy: &LightStrategy,
     scattering: &Scattering,
-    p: Vec3A,
+    ctx: &ShadingContext,
     medium: Rgb,
     glass: mnee::AtVertex,
     highlight: Option<&Highlight>,
@@ -130,7 +131,7 @@ pub fn estimate_direct(
     bounce: u32,
     tally: &mut Tally,
 ) -> Rgb {
-    let sp = &scattering.sp;
+    let (sp, p) = (&scattering.sp, ctx.p);
     let diffuse = sp.is_diffuse();
     match strategy.sampler().filter(|_| !strategy.takes_every_light(diffuse)) {
         None => scene
@@ -146,16 +147,15 @@ pub fn estimate_direct(
         Some(sampler) => {
             let u_select = stream.get_1d_u64(bounce, Dim::LightSelect, 0);
             let u_point = stream.get_2d_u64(bounce, Dim::LightPoint, 0);
-            let ctx = ShadingContext::of(p, sp);
             let rays = &mut tally.rays;
             let choice = timed(rays.timing, &mut rays.time.choice, || {
-                sampler.sample_prefetching(&ctx, diffuse, u_select, &scene.lights)
+                sampler.sample_prefetching(ctx, diffuse, u_select, &scene.lights)
             });
             match choice {
                 Some(s) => {
                     debug_assert!(s.pmf > 0.0);
                     let Tally { rays, seen, .. } = tally;
-                    let observe = |c, visible| seen.record_light_sample(strategy, &ctx, s.light, c, visible);
+                    let observe = |c, visible| seen.record_light_sample(strategy, ctx, s.light, c, visible);
                     let (id, pmf) = (s.light.0, s.pmf);
                     light_contribution(scene, id, pmf, scattering, p, medium, glass, highlight, u_point, rays, observe)
                 }

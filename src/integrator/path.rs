@@ -325,6 +325,9 @@ impl Tracer<'_> {
             let Some(surface) = Surface::at(scene, material, &hit, entering, as_smooth) else { break };
             let sp = surface.seen_from(wo);
             let scattering = Scattering::new(&sp, hit.p, guide);
+            // How lights are chosen here, by next-event estimation and by the MIS weight where
+            // the next ray meets one.
+            let ctx = ShadingContext::of(hit.p, &sp);
             // Light paths sample camera → x1 → glossy x2 → point or spot light too.
             let highlight = light_paths.and_then(|paths| match (depth, x1, prev) {
                 (0, ..) => {
@@ -347,7 +350,7 @@ impl Tracer<'_> {
                 };
                 let highlight = highlight.as_ref();
                 let direct = beta
-                    * estimate_direct(scene, strategy, &scattering, hit.p, medium, at, highlight, stream, depth, tally);
+                    * estimate_direct(scene, strategy, &scattering, &ctx, medium, at, highlight, stream, depth, tally);
                 l += clamped(direct, clamp.limit(depth >= 1));
             }
 
@@ -361,7 +364,7 @@ impl Tracer<'_> {
             if bs.wi.dot(sp.n_geom) < 0.0 && !material.thin {
                 medium = if entering { material.absorption } else { Rgb::ZERO };
             }
-            let left = Previous { ctx: ShadingContext::of(hit.p, &sp), bsdf_pdf: bs.pdf, diffuse: sp.is_diffuse() };
+            let left = Previous { ctx, bsdf_pdf: bs.pdf, diffuse: sp.is_diffuse() };
             chain = match glass {
                 _ if receiver => GlassChain::leaving(left.ctx, left.diffuse, sp.n_geom, left.bsdf_pdf),
                 Some(_) if bs.wi.dot(sp.n_geom) < 0.0 => chain.through(hit.p),
