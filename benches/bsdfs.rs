@@ -1,6 +1,7 @@
 #![allow(missing_docs)] // criterion_group! generates undocumented items
-//! BSDF cost per model: one `sample` and one `eval` + `pdf` (what a path vertex does for the
-//! BSDF-sampled direction and the light sample) (`cargo bench --bench bsdfs`).
+//! BSDF cost per model: one `sample` and one `eval` + `pdf` of a model seen from `wo` (what a
+//! path vertex does for the BSDF-sampled direction and the light sample: `eval_pdf`, which
+//! shares the half vector and the lobes' terms) (`cargo bench --bench bsdfs`).
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use myriad::material::{Bsdf, Diffuse, Principled};
@@ -39,7 +40,7 @@ fn bsdfs(c: &mut Criterion) {
                 let s = SampleStream::new(2, k, 0);
                 let wo = myriad::math::warp::square_to_cosine_hemisphere(s.get_2d(0, Dim::PixelJitter, 0));
                 let wi = myriad::math::warp::square_to_cosine_hemisphere(s.get_2d(0, Dim::LightPoint, 0));
-                black_box((b.eval(black_box(wo), wi), b.pdf(wo, wi)))
+                black_box(b.at(black_box(wo)).eval_pdf(wi))
             })
         });
     }

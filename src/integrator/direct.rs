@@ -47,7 +47,8 @@ fn light_contribution(
     }
     let Some(ls) = light.sample_li(p, u, &scene.images) else { return Rgb::ZERO };
     let sp = &scattering.sp;
-    let f = sp.eval_cos(ls.wi);
+    // BSDF sampling cannot find a delta light: its density there is not needed.
+    let (f, bsdf_pdf) = if light.is_delta() { (sp.eval_cos(ls.wi), 0.0) } else { sp.eval_cos_pdf(ls.wi) };
     // A light behind glass is connected whatever the straight way's cosine says (BSDF
     // sampling weighs its paths by whether the connection would have found them).
     let behind_glass = glass.refractions > 0 && light.connects_through_glass();
@@ -104,7 +105,7 @@ fn light_contribution(
         return Rgb::ZERO;
     }
     let weight = match highlight {
-        _ if !light.is_delta() => power_heuristic(pmf * ls.pdf, scattering.pdf(ls.wi)),
+        _ if !light.is_delta() => power_heuristic(pmf * ls.pdf, scattering.mixed_pdf(ls.wi, bsdf_pdf)),
         Some(h) => h.weight(scene, id, &ls),
         None => 1.0,
     };

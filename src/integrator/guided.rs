@@ -53,7 +53,13 @@ impl<'a> Scattering<'a> {
     /// Density of sampling world direction `wi` (unit).
     #[inline]
     pub fn pdf(&self, wi: Vec3A) -> f32 {
-        let bsdf = self.sp.pdf(wi);
+        self.mixed_pdf(wi, self.sp.pdf(wi))
+    }
+
+    /// Density of sampling world direction `wi` (unit) where the BSDF samples it with
+    /// density `bsdf` (from [`ShadingPoint::eval_cos_pdf`]).
+    #[inline]
+    pub fn mixed_pdf(&self, wi: Vec3A, bsdf: f32) -> f32 {
         match self.guide {
             None => bsdf,
             Some((d, alpha)) => alpha * d.pdf(wi) + (1.0 - alpha) * bsdf,
@@ -70,11 +76,11 @@ impl<'a> Scattering<'a> {
         let Some((d, alpha)) = self.guide else { return from_bsdf() };
         if stream.get_1d(bounce, Dim::GuideChoice, 0) < alpha {
             let (wi, p_guide) = d.sample(stream.get_2d(bounce, Dim::GuideDirection, 0));
-            let f = self.sp.eval_cos(wi);
+            let (f, bsdf) = self.sp.eval_cos_pdf(wi);
             if f == Rgb::ZERO {
                 return None;
             }
-            let pdf = alpha * p_guide + (1.0 - alpha) * self.sp.pdf(wi);
+            let pdf = alpha * p_guide + (1.0 - alpha) * bsdf;
             Some(BsdfSample { wi, weight: f / pdf, pdf })
         } else {
             let s = from_bsdf()?;

@@ -108,14 +108,44 @@ impl Ggx {
         Vec3A::new(ax * nh.x, ay * nh.y, nh.z.max(0.0)).normalize()
     }
 
+    /// What a lobe's value and its sampling density towards one direction share: D(h) and
+    /// Λ(wo), worked out once for both.
+    #[inline]
+    pub fn facet(&self, wo: Vec3A, h: Vec3A) -> Facet {
+        Facet { d: self.d(h), lambda_o: self.lambda(wo) }
+    }
+
+    /// G2(wo, wi) with Λ(wo) from `facet`.
+    #[inline]
+    pub fn g2_from(&self, facet: Facet, wi: Vec3A) -> f32 {
+        1.0 / (1.0 + facet.lambda_o + self.lambda(wi))
+    }
+}
+
+/// D(h) and Λ(wo) of a [`Ggx`] for one `wo` and half vector `h` ([`Ggx::facet`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Facet {
+    /// D(h).
+    pub d: f32,
+    /// Λ(wo).
+    pub lambda_o: f32,
+}
+
+impl Facet {
+    /// Masking G1(wo).
+    #[inline]
+    pub fn g1(&self) -> f32 {
+        1.0 / (1.0 + self.lambda_o)
+    }
+
     /// Solid-angle density of the reflected direction `wi` when `h` was drawn by
     /// [`Ggx::sample_visible_normal`] from `wo`: G1(wo)·D(h) / (4·wo.z).
     #[inline]
-    pub fn reflection_pdf(&self, wo: Vec3A, h: Vec3A) -> f32 {
+    pub fn reflection_pdf(&self, wo: Vec3A) -> f32 {
         if wo.z <= 0.0 {
             return 0.0;
         }
-        self.g1(wo) * self.d(h) / (4.0 * wo.z)
+        self.g1() * self.d / (4.0 * wo.z)
     }
 }
 

@@ -114,6 +114,15 @@ impl BsdfAt {
         }
     }
 
+    /// [`eval`](Self::eval) and [`pdf`](Self::pdf) towards `wi` at once (for less than both).
+    #[inline]
+    pub fn eval_pdf(&self, wi: Vec3A) -> (Rgb, f32) {
+        match self {
+            BsdfAt::Diffuse(b, wo) => (b.eval(*wo, wi), b.pdf(*wo, wi)),
+            BsdfAt::Principled(b) => b.eval_pdf(wi),
+        }
+    }
+
     /// Whether it is Lambert's BSDF: one lobe, and the cheapest to evaluate.
     #[inline]
     pub fn is_diffuse(&self) -> bool {
@@ -554,6 +563,17 @@ impl ShadingPoint {
             return 0.0;
         }
         self.bsdf.pdf(li)
+    }
+
+    /// [`eval_cos`](Self::eval_cos) and [`pdf`](Self::pdf) for world direction `wi` at once.
+    #[inline]
+    pub fn eval_cos_pdf(&self, wi: Vec3A) -> (Rgb, f32) {
+        let li = self.frame.to_local(wi);
+        if !self.allows(wi, li) {
+            return (Rgb::ZERO, 0.0);
+        }
+        let (f, pdf) = self.bsdf.eval_pdf(li);
+        (f * li.z.abs(), pdf)
     }
 
     /// Whether [`sample`](Self::sample) reads its `u_lobe`: a caller may pass anything

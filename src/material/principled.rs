@@ -31,7 +31,7 @@
 
 use super::BsdfSample;
 use super::fresnel::{self, F82Tint};
-use super::microfacet::Ggx;
+use super::microfacet::{Facet, Ggx};
 use super::sheen::{Sheen, SheenLobe};
 use super::tables;
 use crate::math::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
@@ -351,65 +351,95 @@ impl Principled {
         }
     }
 
-    #[inline]
-    fn eval_view(&self, v: &View, wo: Vec3A, wi: Vec3A) -> Rgb {
+    /// The value f(wo, wi) (without the cosine) where `F`, and the density of sampling `wi`
+    /// where `P` (0 for what is not asked for): asked together, they share the half vector,
+    /// each lobe's D(h) and Λ(wo) ([`Facet`]) and the sheen seen from `wo`.
+    #[inline(always)]
+    fn eval_pdf_view<const F: bool, const P: bool>(&self, v: &View, wo: Vec3A, wi: Vec3A) -> (Rgb, f32) {
         if wi.z < 0.0 {
-            return self.glass.map_or(Rgb::ZERO, |g| {
-                if g.thin {
-                    let m = mirrored(wi);
-                    let h = (wo + m).normalize();
-                    let f = fresnel::dielectric(wo.dot(h), g.eta);
-                    let gg = self.glass_ggx();
-                    let lobe = gg.d(h) * gg.g2(wo, m) / (4.0 * wo.z * m.z);
-                    return g.tint * v.glass * ((1.0 - f) * lobe);
-                }
-                let Some((h, _, cos_o, cos_i)) = g.refraction(wo, wi) else { return Rgb::ZERO };
-                let f = fresnel::dielectric(cos_o, g.eta);
-                let denominator = cos_o + g.eta * cos_i;
-                let gg = self.glass_ggx();
-                let geometry = gg.d(h) * gg.g2(wo, wi) * g.eta * g.eta * cos_o * cos_i.abs()
-                    / (wo.z * wi.z.abs() * denominator * denominator);
-                g.tint * v.glass * ((1.0 - f) * geometry)
-            });
+            return self.transmitted::<F, P>(v, wo, wi);
         }
         let h = (wo + wi).normalize();
-        let mu = wo.dot(h).max(0.0);
-        let lobe = |g: &Ggx| g.d(h) * g.g2(wo, wi) / (4.0 * wo.z * wi.z);
-        let specular = self.specular.map_or(Rgb::ZERO, |s| s.fresnel(mu) * v.specular);
-        let base_lobe = lobe(&self.ggx);
-        let glass = self.glass.map_or(Rgb::ZERO, |g| {
-            let glass_lobe = if self.ggx.is_isotropic() { base_lobe } else { lobe(&self.glass_ggx()) };
-            v.glass * (fresnel::dielectric(mu, g.eta) * glass_lobe)
+        let base = self.ggx.facet(wo, h);
+        // The glass reflects with the base's distribution where that is isotropic.
+        let glass_facet = self.glass.map(|_| match self.ggx.is_isotropic() {
+            true => (self.ggx, base),
+            false => {
+                let gg = self.glass_ggx();
+                (gg, gg.facet(wo, h))
+            }
         });
-        let coat = self.coat.map_or(Rgb::ZERO, |c| c.layer.fresnel(mu) * (v.coat * lobe(&c.ggx)));
-        let sheen = if v.p_sheen > 0.0 { self.sheen_lobe(wo).map_or(Rgb::ZERO, |l| l.eval(wi)) } else { Rgb::ZERO };
-        sheen + coat + (self.metal.eval(mu) * v.metal + specular) * base_lobe + glass + v.diffuse
+        let coat = self.coat.map(|c| (c, c.ggx.facet(wo, h)));
+        let sheen = if v.p_sheen > 0.0 { self.sheen_lobe(wo) } else { None };
+        let value = if F {
+            let mu = wo.dot(h).max(0.0);
+            let lobe = |g: &Ggx, facet: Facet| facet.d * g.g2_from(facet, wi) / (4.0 * wo.z * wi.z);
+            let specular = self.specular.map_or(Rgb::ZERO, |s| s.fresnel(mu) * v.specular);
+            let base_lobe = lobe(&self.ggx, base);
+            let glass = self.glass.zip(glass_facet).map_or(Rgb::ZERO, |(g, (gg, facet))| {
+                let glass_lobe = if self.ggx.is_isotropic() { base_lobe } else { lobe(&gg, facet) };
+                v.glass * (fresnel::dielectric(mu, g.eta) * glass_lobe)
+            });
+            let coat = coat.map_or(Rgb::ZERO, |(c, facet)| c.layer.fresnel(mu) * (v.coat * lobe(&c.ggx, facet)));
+            let sheen = sheen.map_or(Rgb::ZERO, |l| l.eval(wi));
+            sheen + coat + (self.metal.eval(mu) * v.metal + specular) * base_lobe + glass + v.diffuse
+        } else {
+            Rgb::ZERO
+        };
+        let pdf = if P {
+            let coat = coat.map_or(0.0, |(_, facet)| v.p_coat * facet.reflection_pdf(wo));
+            let glass = self.glass.zip(glass_facet).map_or(0.0, |(g, (_, facet))| {
+                let f = fresnel::dielectric(wo.dot(h), g.eta);
+                v.p_glass * g.reflect_probability(f) * facet.reflection_pdf(wo)
+            });
+            let sheen = sheen.map_or(0.0, |l| v.p_sheen * l.pdf(wi));
+            let diffuse = (1.0 - v.p_sheen - v.p_coat - v.p_glossy - v.p_glass).max(0.0);
+            sheen + coat + glass + v.p_glossy * base.reflection_pdf(wo) + diffuse * cosine_hemisphere_pdf(wi.z)
+        } else {
+            0.0
+        };
+        (value, pdf)
     }
 
-    #[inline]
-    fn pdf_view(&self, v: &View, wo: Vec3A, wi: Vec3A) -> f32 {
-        if wi.z < 0.0 {
-            return self.glass.map_or(0.0, |g| {
-                if g.thin {
-                    let h = (wo + mirrored(wi)).normalize();
-                    let f = fresnel::dielectric(wo.dot(h), g.eta);
-                    return v.p_glass * (1.0 - g.reflect_probability(f)) * self.glass_ggx().reflection_pdf(wo, h);
-                }
-                let Some((h, jacobian, cos_o, _)) = g.refraction(wo, wi) else { return 0.0 };
-                let gg = self.glass_ggx();
-                let visible = gg.g1(wo) * cos_o * gg.d(h) / wo.z;
-                v.p_glass * (1.0 - g.reflect_probability(fresnel::dielectric(cos_o, g.eta))) * visible * jacobian
-            });
-        }
-        let h = (wo + wi).normalize();
-        let coat = self.coat.map_or(0.0, |c| v.p_coat * c.ggx.reflection_pdf(wo, h));
-        let glass = self.glass.map_or(0.0, |g| {
-            let f = fresnel::dielectric(wo.dot(h), g.eta);
-            v.p_glass * g.reflect_probability(f) * self.glass_ggx().reflection_pdf(wo, h)
-        });
-        let sheen = if v.p_sheen > 0.0 { self.sheen_lobe(wo).map_or(0.0, |l| v.p_sheen * l.pdf(wi)) } else { 0.0 };
-        let diffuse = (1.0 - v.p_sheen - v.p_coat - v.p_glossy - v.p_glass).max(0.0);
-        sheen + coat + glass + v.p_glossy * self.ggx.reflection_pdf(wo, h) + diffuse * cosine_hemisphere_pdf(wi.z)
+    /// [`eval_pdf_view`](Self::eval_pdf_view) below the surface (`wi.z` < 0): the glass's
+    /// transmission, through a thin sheet or refracted.
+    #[inline(always)]
+    fn transmitted<const F: bool, const P: bool>(&self, v: &View, wo: Vec3A, wi: Vec3A) -> (Rgb, f32) {
+        self.glass.map_or((Rgb::ZERO, 0.0), |g| {
+            let gg = self.glass_ggx();
+            if g.thin {
+                let m = mirrored(wi);
+                let h = (wo + m).normalize();
+                let f = fresnel::dielectric(wo.dot(h), g.eta);
+                let facet = gg.facet(wo, h);
+                let value = if F {
+                    let lobe = facet.d * gg.g2_from(facet, m) / (4.0 * wo.z * m.z);
+                    g.tint * v.glass * ((1.0 - f) * lobe)
+                } else {
+                    Rgb::ZERO
+                };
+                let pdf = if P { v.p_glass * (1.0 - g.reflect_probability(f)) * facet.reflection_pdf(wo) } else { 0.0 };
+                return (value, pdf);
+            }
+            let Some((h, jacobian, cos_o, cos_i)) = g.refraction(wo, wi) else { return (Rgb::ZERO, 0.0) };
+            let f = fresnel::dielectric(cos_o, g.eta);
+            let facet = gg.facet(wo, h);
+            let value = if F {
+                let denominator = cos_o + g.eta * cos_i;
+                let geometry = facet.d * gg.g2_from(facet, wi) * g.eta * g.eta * cos_o * cos_i.abs()
+                    / (wo.z * wi.z.abs() * denominator * denominator);
+                g.tint * v.glass * ((1.0 - f) * geometry)
+            } else {
+                Rgb::ZERO
+            };
+            let pdf = if P {
+                let visible = facet.g1() * cos_o * facet.d / wo.z;
+                v.p_glass * (1.0 - g.reflect_probability(f)) * visible * jacobian
+            } else {
+                0.0
+            };
+            (value, pdf)
+        })
     }
 
     /// True when `wi` is on a side of the surface the model can send light to.
@@ -449,7 +479,17 @@ impl PrincipledAt {
         if !m.reaches(wo, wi) {
             return Rgb::ZERO;
         }
-        m.eval_view(&self.view, wo, wi)
+        m.eval_pdf_view::<true, false>(&self.view, wo, wi).0
+    }
+
+    /// [`eval`](Self::eval) and [`pdf`](Self::pdf) towards `wi` at once, for less than both.
+    #[inline]
+    pub fn eval_pdf(&self, wi: Vec3A) -> (Rgb, f32) {
+        let (m, wo) = (&self.model, self.wo);
+        if !m.reaches(wo, wi) {
+            return (Rgb::ZERO, 0.0);
+        }
+        m.eval_pdf_view::<true, true>(&self.view, wo, wi)
     }
 
     /// The perceptual roughness of the lobes it samples, averaged with the probability it
@@ -482,7 +522,7 @@ impl PrincipledAt {
         if !m.reaches(wo, wi) {
             return 0.0;
         }
-        m.pdf_view(&self.view, wo, wi)
+        m.eval_pdf_view::<false, true>(&self.view, wo, wi).1
     }
 
     /// Picks the glossy or the diffuse lobe with `u_lobe`, then a direction with `u`.
@@ -524,10 +564,10 @@ impl PrincipledAt {
         if !m.reaches(wo, wi) {
             return None;
         }
-        let pdf = m.pdf_view(v, wo, wi);
+        let (f, pdf) = m.eval_pdf_view::<true, true>(v, wo, wi);
         if !(pdf > 0.0) {
             return None;
         }
-        Some(BsdfSample { wi, weight: m.eval_view(v, wo, wi) * (wi.z.abs() / pdf), pdf })
+        Some(BsdfSample { wi, weight: f * (wi.z.abs() / pdf), pdf })
     }
 }

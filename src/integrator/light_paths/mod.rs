@@ -258,7 +258,7 @@ impl LightPaths {
             return None;
         }
         let at_x1 = x1.seen_from(proj.to_camera);
-        let f1 = at_x1.eval_cos(-bs.wi);
+        let (f1, pdf_x1) = at_x1.eval_cos_pdf(-bs.wi);
         let at_x2 = x2.seen_from(bs.wi);
         let ls = light.sample_li(hit2.p, [0, 0], &scene.images)?;
         let f2 = at_x2.eval_cos(ls.wi);
@@ -277,7 +277,7 @@ impl LightPaths {
             pdf_x2: bs.pdf,
             cos_x1: hit1.n_geom.dot(bs.wi).abs(),
             importance: cam.importance,
-            pdf_x1: at_x1.pdf(-bs.wi),
+            pdf_x1,
             cos_x2_x1: hit2.n_geom.dot(bs.wi).abs(),
         };
         let intensity = ls.radiance * densities.dist2_light;
