@@ -313,7 +313,10 @@ impl Tracer<'_> {
             if depth == 0 && first_hits {
                 first_hit = Some(FirstHit::of(scene, &hit, wo));
             }
-            l += clamped(emitted(scene, strategy, &hit, ray.dir, prev, chain, beta, counters), arriving);
+            // (Most hits are on no light: the previous vertex and the chain are not copied there.)
+            if hit.light.is_some() {
+                l += clamped(emitted(scene, strategy, &hit, ray.dir, prev, chain, beta, counters), arriving);
+            }
             if depth == max_depth {
                 break;
             }
@@ -365,11 +368,14 @@ impl Tracer<'_> {
                 medium = if entering { material.absorption } else { Rgb::ZERO };
             }
             let left = Previous { ctx, bsdf_pdf: bs.pdf, diffuse: sp.is_diffuse() };
-            chain = match glass {
-                _ if receiver => GlassChain::leaving(left.ctx, left.diffuse, sp.n_geom, left.bsdf_pdf),
-                Some(_) if bs.wi.dot(sp.n_geom) < 0.0 => chain.through(hit.p),
-                _ => GlassChain::default(),
-            };
+            // Without light through glass the chain stays empty.
+            if caustics {
+                chain = match glass {
+                    _ if receiver => GlassChain::leaving(left.ctx, left.diffuse, sp.n_geom, left.bsdf_pdf),
+                    Some(_) if bs.wi.dot(sp.n_geom) < 0.0 => chain.through(hit.p),
+                    _ => GlassChain::default(),
+                };
+            }
             prev = Some(left);
             ray = Ray::new(sp.ray_origin(hit.p, bs.wi), bs.wi);
             depth += 1;
