@@ -313,7 +313,7 @@ impl Tracer<'_> {
             if depth == 0 && first_hits {
                 first_hit = Some(FirstHit::of(scene, &hit, wo));
             }
-            // (Most hits are on no light: the previous vertex and the chain are not copied there.)
+            // Most hits are on no light; only those on one copy the previous vertex and the chain.
             if hit.light.is_some() {
                 l += clamped(emitted(scene, strategy, &hit, ray.dir, prev, chain, beta, counters), arriving);
             }
