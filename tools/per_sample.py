@@ -99,5 +99,6 @@ def main():
         print(f"| {name} | {e:.4g} | {errors[0]:.4g} – {errors[-1]:.4g} | {i:.0f} | {e * i / best:.2f} "
               f"| {t:.4g} | {t * i / best_trimmed:.2f}{misses} |")
 
+
 if __name__ == "__main__":
     main()
