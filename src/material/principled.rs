@@ -272,8 +272,10 @@ impl Principled {
     /// The same with a coat of `weight` and `roughness` (both in [0, 1]) on top.
     #[inline]
     pub fn with_coat(self, weight: f32, roughness: f32) -> Self {
-        let layer = Specular::new(COAT_IOR, 1.0, Rgb::ONE).expect("IOR 1.5 reflects");
-        let coat = (weight > 0.0).then(|| Coat { weight, roughness, ggx: Ggx::from_roughness(roughness), layer });
+        let coat = (weight > 0.0).then(|| {
+            let layer = Specular::new(COAT_IOR, 1.0, Rgb::ONE).expect("IOR 1.5 reflects");
+            Coat { weight, roughness, ggx: Ggx::from_roughness(roughness), layer }
+        });
         Self { coat, ..self }
     }
 
