@@ -174,41 +174,41 @@ pub fn compute(n: usize) -> (Vec<f32>, Vec<f32>, Vec<f32>) {
     (e, e_avg, s)
 }
 
-/// Linear interpolation weights of `x ∈ [0,1]` on `n` nodes: (lower node, fraction).
+/// Linear interpolation weights of `x ∈ [0,1]` on `N` nodes: (lower node, fraction).
 #[inline]
-fn position(x: f32, n: usize) -> (usize, f32) {
-    let f = x.clamp(0.0, 1.0) * (n - 1) as f32;
+fn position<const N: usize>(x: f32) -> (usize, f32) {
+    let f = x.clamp(0.0, 1.0) * (N - 1) as f32;
     // Through i32, which x86 converts in one instruction each way (usize takes a dozen).
-    let i = (f as i32).min(n as i32 - 2);
+    let i = (f as i32).min(N as i32 - 2);
     (i as usize, f - i as f32)
 }
 
-/// Bilinear lookup in a table of `n × n` (x fastest).
+/// Bilinear lookup in a table of `N × N` (x fastest).
 #[inline]
-fn lookup2(table: &[f32], n: usize, x: f32, y: f32) -> f32 {
-    bilinear(table, n, position(x, n), position(y, n))
+fn lookup2<const N: usize>(table: &[f32], x: f32, y: f32) -> f32 {
+    bilinear::<N>(table, position::<N>(x), position::<N>(y))
 }
 
 /// The bilinear interpolation at a cell's corner (i, j) and fractions (fx, fy).
-#[inline]
-fn bilinear(table: &[f32], n: usize, (i, fx): (usize, f32), (j, fy): (usize, f32)) -> f32 {
+#[inline(always)]
+fn bilinear<const N: usize>(table: &[f32], (i, fx): (usize, f32), (j, fy): (usize, f32)) -> f32 {
     // One bounds check for the cell's four corners.
-    let cell = &table[j * n + i..][..n + 2];
+    let cell = &table[j * N + i..][..N + 2];
     let lo = cell[0] + (cell[1] - cell[0]) * fx;
-    let hi = cell[n] + (cell[n + 1] - cell[n]) * fx;
+    let hi = cell[N] + (cell[N + 1] - cell[N]) * fx;
     lo + (hi - lo) * fy
 }
 
 /// Directional albedo E(r, μ) of a white GGX lobe of perceptual roughness `rough`.
 #[inline]
 pub fn albedo(rough: f32, mu: f32) -> f32 {
-    lookup2(&data::GGX_E, E_NODES, rough, mu)
+    lookup2::<E_NODES>(&data::GGX_E, rough, mu)
 }
 
 /// Ē(r), the cosine-weighted average of [`albedo`].
 #[inline]
 pub fn albedo_average(rough: f32) -> f32 {
-    let (i, f) = position(rough, E_NODES);
+    let (i, f) = position::<E_NODES>(rough);
     data::GGX_E_AVG[i] + (data::GGX_E_AVG[i + 1] - data::GGX_E_AVG[i]) * f
 }
 
@@ -216,19 +216,19 @@ pub fn albedo_average(rough: f32) -> f32 {
 /// table, `sheen.rs`): the linearly transformed cosine's a and b, and the lobe's albedo.
 #[inline]
 pub fn sheen(rough: f32, mu: f32) -> [f32; 3] {
-    let n = sheen::NODES;
-    let ((i, fx), (j, fy)) = (position(mu, n), position(rough, n));
-    let at = |a: usize, b: usize| Vec3A::from(sheen::SHEEN[b * n + a]);
+    const N: usize = sheen::NODES;
+    let ((i, fx), (j, fy)) = (position::<N>(mu), position::<N>(rough));
+    let at = |a: usize, b: usize| Vec3A::from(sheen::SHEEN[b * N + a]);
     let lo = at(i, j).lerp(at(i + 1, j), fx);
     let hi = at(i, j + 1).lerp(at(i + 1, j + 1), fx);
     lo.lerp(hi, fy).to_array()
 }
 
-/// Trilinear lookup in a table of `n³` (x fastest).
+/// Trilinear lookup in a table of `N³` (x fastest).
 #[inline]
-fn lookup3(table: &[f32], n: usize, x: f32, y: f32, z: f32) -> f32 {
-    let (at_x, at_y, (k, fz)) = (position(x, n), position(y, n), position(z, n));
-    let plane = |k: usize| bilinear(&table[k * n * n..], n, at_x, at_y);
+fn lookup3<const N: usize>(table: &[f32], x: f32, y: f32, z: f32) -> f32 {
+    let (at_x, at_y, (k, fz)) = (position::<N>(x), position::<N>(y), position::<N>(z));
+    let plane = |k: usize| bilinear::<N>(&table[k * N * N..], at_x, at_y);
     let (a, b) = (plane(k), plane(k + 1));
     a + (b - a) * fz
 }
@@ -236,7 +236,7 @@ fn lookup3(table: &[f32], n: usize, x: f32, y: f32, z: f32) -> f32 {
 /// s(r, μ, z): the average Fresnel weight of a dielectric lobe (z = F0(η)^¼).
 #[inline]
 pub fn fresnel_weight(rough: f32, mu: f32, z: f32) -> f32 {
-    lookup3(&data::GGX_GEN_SCHLICK_IOR_S, S_NODES, rough, mu, z)
+    lookup3::<S_NODES>(&data::GGX_GEN_SCHLICK_IOR_S, rough, mu, z)
 }
 
 /// The glass tables' z axis for relative IOR `eta` (on either side), and whether it is the
@@ -251,14 +251,14 @@ fn glass_axis(eta: f32) -> (f32, bool) {
 #[inline]
 pub fn glass_albedo(rough: f32, mu: f32, eta: f32) -> f32 {
     let (z, inside) = glass_axis(eta);
-    lookup3(if inside { &data::GGX_GLASS_INV_E } else { &data::GGX_GLASS_E }, S_NODES, rough, mu, z)
+    lookup3::<S_NODES>(if inside { &data::GGX_GLASS_INV_E } else { &data::GGX_GLASS_E }, rough, mu, z)
 }
 
 /// Its cosine-weighted average over the hemisphere.
 #[inline]
 pub fn glass_albedo_average(rough: f32, eta: f32) -> f32 {
     let (z, inside) = glass_axis(eta);
-    lookup2(if inside { &data::GGX_GLASS_INV_E_AVG } else { &data::GGX_GLASS_E_AVG }, S_NODES, rough, z)
+    lookup2::<S_NODES>(if inside { &data::GGX_GLASS_INV_E_AVG } else { &data::GGX_GLASS_E_AVG }, rough, z)
 }
 
 #[cfg(test)]
