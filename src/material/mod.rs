@@ -525,7 +525,7 @@ pub struct ShadingPoint {
 impl ShadingPoint {
     /// Orients the normals towards `wo` (unit, pointing away from the surface); the local x
     /// axis is `tangent` where the BSDF is anisotropic (a unit vector across `n_shading`).
-    #[inline]
+    #[inline(always)]
     pub fn new(bsdf: Bsdf, n_geom: Vec3A, n_shading: Vec3A, tangent: Option<Vec3A>, wo: Vec3A) -> Self {
         let n_geom = if n_geom.dot(wo) < 0.0 { -n_geom } else { n_geom };
         let ns = if n_shading.dot(n_geom) < 0.0 { -n_shading } else { n_shading };
