@@ -139,17 +139,17 @@ fn lobe_weighted(imp: Lanes, lobe_weights: Lanes) -> Lanes {
 }
 
 /// Weights of a node's children at `ctx` (0 for empty slots; weighed by the BSDF's lobes
-/// where `ctx` has them), reweighted, whether `reweight` changed them, and how `range` values
-/// split among them, with the weights as the split counts them (`None` when every weight is 0).
+/// where `ctx` has them), reweighted, and whether `reweight` changed them. How selection
+/// values split among them is [`Split::over`] them, asked for only where the node does not
+/// end the descent uniformly ([`LightTree::flat`]).
 #[inline(always)]
-fn children_split(
+fn children_weights(
     nodes: &[Node],
     node: usize,
     grid: &Quantizer,
     ctx: &ShadingContext,
-    range: u128,
     reweight: &impl Reweight,
-) -> Option<([f32; WIDTH], bool, Split, [f64; WIDTH])> {
+) -> ([f32; WIDTH], bool) {
     let packet = nodes[node].decode(grid);
     let imp = match &ctx.lobes {
         None => packet.importance(ctx.p, ctx.n),
@@ -160,7 +160,7 @@ fn children_split(
     };
     let mut imp = imp.to_array();
     let changed = reweight.reweight(node, &mut imp);
-    Split::over(range, &imp).map(|(s, counted)| (imp, changed, s, counted))
+    (imp, changed)
 }
 
 /// A node whose lights' intensities φ differ by at most this factor may choose among them
@@ -342,15 +342,15 @@ impl LightTree {
                     }
                 }
             }
-            let (imp, changed, mut split, counted) =
-                children_split(&self.nodes, node, &self.grid, ctx, range, reweight)?;
-            if let Some(m) = self.flat(node, &imp).filter(|_| !changed) {
+            let (imp, changed) = children_weights(&self.nodes, node, &self.grid, ctx, reweight);
+            if !changed && let Some(m) = self.flat(node, &imp) {
                 let k = even_pick(u, m, range);
                 let (a, b) = even_interval(k, m, range);
                 let width = b - a;
                 let light = self.order[(self.spans[node].0 + k) as usize];
                 return Some(SampledLight { light: LightId(light), pmf: probability(width) });
             }
+            let (mut split, counted) = Split::over(range, &imp)?;
             // The child whose interval holds u (the intervals tile the range, so one does).
             let (k, (start, end)) = (counted.iter().map(|&c| split.next_counted(c)).enumerate())
                 .find(|(_, (_, end))| u < *end)
@@ -441,16 +441,15 @@ impl LightTree {
             if self.fetch_ahead && n.children[k] & LEAF == 0 {
                 prefetch(&self.nodes, n.children[k] as usize);
             }
-            let Some((imp, changed, mut split, counted)) =
-                children_split(&self.nodes, node, &self.grid, ctx, range, reweight)
-            else {
-                return (start, start);
-            };
-            if let Some(m) = self.flat(node, &imp).filter(|_| !changed) {
+            let (imp, changed) = children_weights(&self.nodes, node, &self.grid, ctx, reweight);
+            if !changed && let Some(m) = self.flat(node, &imp) {
                 let k = self.rank[light.0 as usize] - self.spans[node].0;
                 let (a, b) = even_interval(k, m, range);
                 return (start + a, start + b);
             }
+            let Some((mut split, counted)) = Split::over(range, &imp) else {
+                return (start, start);
+            };
             let (a, b) = counted[..=k].iter().map(|&c| split.next_counted(c)).last().expect("k < WIDTH");
             (start, range) = (start + a, b - a);
             let child = n.children[k];
