@@ -16,7 +16,7 @@ inlined) show which line of which file a sample pays for.
   sample, the largest first, with the line's text for the repository's files.
 - `--asm FUNCTION`: the function whose symbol contains FUNCTION (the largest such) grouped by
   the source line `objdump -l` gives each of its instructions, and how often it is called a
-  sample; its instructions' run counts tell set-up (once a call) from loops.
+  sample.
 - `--against OTHER`: the same counts for a second build, side by side, sorted by the
   difference (what a change moved, line by line).
 
