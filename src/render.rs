@@ -3,9 +3,9 @@
 //! Owns: [`RenderSettings`], [`render`], [`RenderOutput`] and the [`RenderObserver`] that
 //! watches a render (progress displays, convergence plots; no UI crate here). The film is
 //! cut into bands of rows; rayon's work stealing balances them. Sample `s` of pixel `p`
-//! always uses `SampleStream::new(seed, p, s)`, and a pixel's samples are added in index
-//! order, so the image is bit-identical whatever the thread count, and a render of samples
-//! `a..b` merges exactly with one of `b..c`. An equal-time render runs passes until its
+//! always uses `SampleStream::new(seed, p, s)` (as `PixelStreams::new(seed, p).sample(s)`),
+//! and a pixel's samples are added in index order, so the image is bit-identical whatever
+//! the thread count, and a render of samples `a..b` merges exactly with one of `b..c`. An equal-time render runs passes until its
 //! budget is spent.
 
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -21,7 +21,7 @@ use crate::interrupt::{self, Stop};
 use crate::learning::{Learning, Seen};
 use crate::light_sampler::{LearnedStats, LightStrategy};
 use crate::math::UVec2;
-use crate::sampling::{Dim, SampleStream};
+use crate::sampling::{Dim, PixelStreams};
 use crate::scene::Scene;
 use crate::settings::Clamp;
 
@@ -273,8 +273,9 @@ fn render_pass(pass: &Pass, film: &mut Film, recording: &Seen, watch: Watch) -> 
                 }
                 let index = row0 as usize * size.x as usize + k;
                 let pixel = UVec2::new(index as u32 % size.x, index as u32 / size.x);
+                let streams = PixelStreams::new(settings.seed, index as u64);
                 for s in first..first + count {
-                    let stream = SampleStream::new(settings.seed, index as u64, s as u64);
+                    let stream = streams.sample(s as u64);
                     let jitter = stream.get_2d(0, Dim::PixelJitter, 0);
                     let ray = if scene.camera.has_lens() {
                         scene.camera.ray_through_lens(pixel, size, jitter, stream.get_2d(0, Dim::Lens, 0))

@@ -1,9 +1,9 @@
 //! Random numbers with addresses: every number is a pure function of (seed, pixel, sample
 //! index, bounce, [`Dim`], sub-index).
 //!
-//! Owns: [`SampleStream`]. There is no state to advance, so results do not depend on thread
-//! count, tile order or on how many numbers another code path consumed (pbrt-v4 samplers,
-//! Cycles `path_rng_1D`). Each (seed, pixel, bounce, dimension) selects a differently
+//! Owns: [`SampleStream`] (and [`PixelStreams`], what a pixel's streams share). There is no
+//! state to advance, so results do not depend on thread count, tile order or on how many
+//! numbers another code path consumed (pbrt-v4 samplers, Cycles `path_rng_1D`). Each (seed, pixel, bounce, dimension) selects a differently
 //! scrambled Sobol sequence (`sobol.rs`) and the sample index is the position in it: the
 //! samples of a pixel are stratified in every dimension and every pair of 2D dimensions,
 //! which independent random numbers are not. Seeds are mixed with MurmurHash3's `fmix64`.
@@ -35,15 +35,45 @@ pub struct SampleStream {
     sample_reversed: u32,
 }
 
-impl SampleStream {
-    /// The stream of sample `sample` of pixel `pixel` (a linear index) under `seed`.
+/// The streams of one pixel's samples: what their keys share, worked out once for all of them.
+#[derive(Clone, Copy, Debug)]
+pub struct PixelStreams {
+    /// The pixel's key under the seed.
+    key: u64,
+    /// The sample key of the first 2³² samples (every render's).
+    first: u64,
+}
+
+impl PixelStreams {
+    /// The streams of pixel `pixel` (a linear index) under `seed`.
     #[inline]
-    pub fn new(seed: u64, pixel: u64, sample: u64) -> Self {
+    pub fn new(seed: u64, pixel: u64) -> Self {
         let k = fmix64(seed ^ 0x9e37_79b9_7f4a_7c15);
         let key = fmix64(k ^ pixel.wrapping_mul(0xd1b5_4a32_d192_ed03));
-        // Beyond 2^32 samples per pixel the sequence repeats with a fresh scramble.
-        let key = fmix64(key ^ (sample >> 32));
-        Self { key, sample_reversed: (sample as u32).reverse_bits() }
+        Self { key, first: Self::sample_key(key, 0) }
+    }
+
+    /// Beyond 2³² samples per pixel the sequence repeats with a fresh scramble.
+    #[inline]
+    fn sample_key(key: u64, high: u64) -> u64 {
+        fmix64(key ^ high)
+    }
+
+    /// The stream of sample `sample`.
+    #[inline]
+    pub fn sample(&self, sample: u64) -> SampleStream {
+        let high = sample >> 32;
+        let key = if high == 0 { self.first } else { Self::sample_key(self.key, high) };
+        SampleStream { key, sample_reversed: sobol::bit_reversed(sample as u32) }
+    }
+}
+
+impl SampleStream {
+    /// The stream of sample `sample` of pixel `pixel` (a linear index) under `seed`
+    /// ([`PixelStreams`] where a pixel takes several).
+    #[inline]
+    pub fn new(seed: u64, pixel: u64, sample: u64) -> Self {
+        PixelStreams::new(seed, pixel).sample(sample)
     }
 
     /// The scramble seed of one dimension.
@@ -129,6 +159,16 @@ mod tests {
         assert_ne!(wide & 0xffff_ffff, SampleStream::new(7, 123, 5).get_1d_u64(2, Dim::LightSelect, 0) & 0xffff_ffff);
         let [x, y] = a.get_2d_u64(1, Dim::LightPoint, 3);
         assert_eq!(Vec2::new(unit_f32(x), unit_f32(y)), a.get_2d(1, Dim::LightPoint, 3));
+    }
+
+    #[test]
+    fn a_pixels_streams_are_its_samples_streams() {
+        for sample in [0u64, 1, 77, (1 << 32) - 1, 1 << 32, (5 << 32) + 3] {
+            let (a, b) = (PixelStreams::new(9, 1234).sample(sample), SampleStream::new(9, 1234, sample));
+            assert_eq!((a.key, a.sample_reversed), (b.key, b.sample_reversed));
+            assert_eq!(a.sample_reversed, (sample as u32).reverse_bits());
+            assert_ne!(a.key, PixelStreams::new(9, 1234).sample(sample + (1 << 32)).key, "a fresh scramble");
+        }
     }
 
     #[test]

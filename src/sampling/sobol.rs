@@ -99,7 +99,7 @@ fn bit_reversed_2(a: u32, b: u32) -> (u32, u32) {
 
 /// `x.reverse_bits()` as [`bit_reversed_2`] does it.
 #[inline(always)]
-fn bit_reversed(x: u32) -> u32 {
+pub fn bit_reversed(x: u32) -> u32 {
     bit_reversed_2(x, 0).0
 }
 
