@@ -3,10 +3,10 @@
 //!
 //! Owns: [`SampleStream`] (and [`PixelStreams`], what a pixel's streams share). There is no
 //! state to advance, so results do not depend on thread count, tile order or on how many
-//! numbers another code path consumed (pbrt-v4 samplers, Cycles `path_rng_1D`). Each (seed, pixel, bounce, dimension) selects a differently
-//! scrambled Sobol sequence (`sobol.rs`) and the sample index is the position in it: the
-//! samples of a pixel are stratified in every dimension and every pair of 2D dimensions,
-//! which independent random numbers are not. Seeds are mixed with MurmurHash3's `fmix64`.
+//! numbers another code path consumed (pbrt-v4 samplers, Cycles `path_rng_1D`). Each (seed,
+//! pixel, bounce, dimension) selects a differently scrambled Sobol sequence (`sobol.rs`) and
+//! the sample index is the position in it: the samples of a pixel are stratified in every
+//! dimension and every pair of 2D dimensions, which independent random numbers are not. Seeds are mixed with MurmurHash3's `fmix64`.
 //! Depends on `math` only.
 
 mod dimension;
