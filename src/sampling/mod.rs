@@ -6,8 +6,8 @@
 //! numbers another code path consumed (pbrt-v4 samplers, Cycles `path_rng_1D`). Each (seed,
 //! pixel, bounce, dimension) selects a differently scrambled Sobol sequence (`sobol.rs`) and
 //! the sample index is the position in it: the samples of a pixel are stratified in every
-//! dimension and every pair of 2D dimensions, which independent random numbers are not. Seeds are mixed with MurmurHash3's `fmix64`.
-//! Depends on `math` only.
+//! dimension and every pair of 2D dimensions, which independent random numbers are not.
+//! Seeds are mixed with MurmurHash3's `fmix64`. Depends on `math` only.
 
 mod dimension;
 mod sobol;
