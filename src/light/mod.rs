@@ -102,7 +102,7 @@ impl Light {
     /// Samples the light as seen from `p` with two 64-bit numbers (area lights take their
     /// top 24 bits as floats in `[0,1)²`); `None` when it cannot reach `p`. Emission
     /// textures read `images`, the scene's.
-    #[inline]
+    #[inline(always)]
     pub fn sample_li(&self, p: Vec3A, u: [u64; 2], images: &[Image]) -> Option<LightSample> {
         let unit = || Vec2::new(unit_f32(u[0]), unit_f32(u[1]));
         match self {
