@@ -14,8 +14,8 @@ inlined) show which line of which file a sample pays for.
 
 - `--by line` (the default), `--by file`, `--by function`: each one's own instructions a
   sample, the largest first, with the line's text for the repository's files.
-- `--asm FUNCTION`: the function whose symbol contains FUNCTION (of several such, the one a
-  sample spends most in), its instructions grouped by the source line `objdump -l` gives
+- `--asm FUNCTION`: the function whose symbol is FUNCTION, else contains it (of several such,
+  the one a sample spends most in), its instructions grouped by the source line `objdump -l` gives
   each, and how often it is called a sample.
 - `--against OTHER`: the same counts for a second build, side by side, sorted by the
   difference (what a change moved, line by line).
@@ -155,7 +155,8 @@ def asm(myriad, costs, name, top):
              (ln.split(" ", 3) for ln in symbols.splitlines() if ln.count(" ") >= 3) if t in "tT" and name in rest]
     if not found:
         sys.exit(f"no function whose symbol contains {name!r} in {myriad}")
-    # The copy a sample spends most in, where inlining left several.
+    # A symbol that is the name exactly, else the copy a sample spends most in.
+    found = [f for f in found if f[2] == name] or found
     spent = lambda f: sum(c for (a, *_), c in costs.items() if f[0] <= a < f[0] + f[1])  # noqa: E731
     start, size, symbol = max(found, key=spent)
     dump = subprocess.run(["objdump", "-d", "-l", "-C", "--no-show-raw-insn", f"--start-address={start:#x}",
