@@ -14,9 +14,9 @@ inlined) show which line of which file a sample pays for.
 
 - `--by line` (the default), `--by file`, `--by function`: each one's own instructions a
   sample, the largest first, with the line's text for the repository's files.
-- `--asm FUNCTION`: the function whose symbol is FUNCTION, else contains it (of several such,
-  the one a sample spends most in), its instructions grouped by the source line `objdump -l` gives
-  each, and how often it is called a sample.
+- `--asm FUNCTION`: the function whose symbol is FUNCTION, else contains it (of several
+  such, the one a sample spends most in), its instructions grouped by the source line
+  `objdump -l` gives each, and how often it is called a sample.
 - `--against OTHER`: the same counts for a second build, side by side, sorted by the
   difference (what a change moved, line by line).
 
