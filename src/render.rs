@@ -5,8 +5,8 @@
 //! cut into bands of rows; rayon's work stealing balances them. Sample `s` of pixel `p`
 //! always uses `SampleStream::new(seed, p, s)` (as `PixelStreams::new(seed, p).sample(s)`),
 //! and a pixel's samples are added in index order, so the image is bit-identical whatever
-//! the thread count, and a render of samples `a..b` merges exactly with one of `b..c`. An equal-time render runs passes until its
-//! budget is spent.
+//! the thread count, and a render of samples `a..b` merges exactly with one of `b..c`. An
+//! equal-time render runs passes until its budget is spent.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
