@@ -27,6 +27,7 @@ import argparse
 import collections
 import re
 import shlex
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -38,9 +39,8 @@ POSITION = re.compile(r"^(0x[0-9a-fA-F]+|[+-]\d+|\*|\d+)\s+(0x[0-9a-fA-F]+|[+-]\
 
 def callgrind(myriad, scene, spp, args, out):
     """Runs one render under callgrind with per-instruction counts into `out`."""
-    w, h = args.resolution.split("x")
     cmd = ["valgrind", "--tool=callgrind", "--dump-instr=yes", f"--callgrind-out-file={out}", myriad, "render",
-           scene, "--spp", str(spp), "--resolution", f"{w}x{h}", "--threads", "1", "--seed", "1", "--sampler",
+           scene, "--spp", str(spp), "--resolution", args.resolution, "--threads", "1", "--seed", "1", "--sampler",
            args.sampler, "-o", str(Path(out).with_suffix(".exr")), "-q", *shlex.split(args.flags)]
     subprocess.run(cmd, check=True, capture_output=True)
 
@@ -143,22 +143,30 @@ def grouped(costs, by, ours):
 
 
 def label(key):
+    """A line (with its text where it is the repository's), a file or a function, as printed."""
     if len(key) == 2:
         return f"{short(key[0])}:{key[1]}  {text_of(key[0], key[1])}"
     return short(key[0]) if key[0].startswith("/") else key[0]
 
 
-def asm(myriad, costs, name, top):
-    """One function's instructions grouped by the source line objdump gives each."""
+def function_range(myriad, costs, name):
+    """(start, size, symbol) of the function named `name` exactly, else of the copy whose
+    symbol contains it that a sample spends most in (inlining leaves several)."""
     symbols = subprocess.run(["nm", "-C", "-S", myriad], capture_output=True, text=True, check=True).stdout
     found = [(int(s, 16), int(z, 16), rest) for s, z, t, rest in
              (ln.split(" ", 3) for ln in symbols.splitlines() if ln.count(" ") >= 3) if t in "tT" and name in rest]
     if not found:
         sys.exit(f"no function whose symbol contains {name!r} in {myriad}")
-    # A symbol that is the name exactly, else the copy a sample spends most in.
-    found = [f for f in found if f[2] == name] or found
-    spent = lambda f: sum(c for (a, *_), c in costs.items() if f[0] <= a < f[0] + f[1])  # noqa: E731
-    start, size, symbol = max(found, key=spent)
+
+    def spent(f):
+        return sum(c for (a, *_), c in costs.items() if f[0] <= a < f[0] + f[1])
+
+    return max([f for f in found if f[2] == name] or found, key=spent)
+
+
+def asm(myriad, costs, name, top):
+    """One function's instructions grouped by the source line objdump gives each."""
+    start, size, symbol = function_range(myriad, costs, name)
     dump = subprocess.run(["objdump", "-d", "-l", "-C", "--no-show-raw-insn", f"--start-address={start:#x}",
                            f"--stop-address={start + size:#x}", myriad], capture_output=True, text=True, check=True)
     by_addr = collections.Counter()
@@ -175,6 +183,9 @@ def asm(myriad, costs, name, top):
         if m and source:
             lines[source] += by_addr.get(int(m.group(1), 16), 0)
     print(f"{symbol}: {sum(by_addr.values()):.0f} instructions a sample, called {by_addr.get(start, 0):.2f} times")
+    if not by_addr:
+        print("(no sample runs this copy: the function is inlined into its callers, or not called here)")
+        return
     for key, c in lines.most_common(top):
         print(f"{c:9.1f}  {label(key)}")
 
@@ -196,6 +207,11 @@ def main():
     for binary in filter(None, [args.myriad, args.against]):
         if not Path(binary).exists():
             sys.exit(f"{binary} is missing: cargo build --release")
+    if not Path(args.scene).exists():
+        sys.exit(f"{args.scene}: no such scene file")
+    for tool in ["valgrind"] + (["nm", "objdump"] if args.asm else []):
+        if not shutil.which(tool):
+            sys.exit(f"{tool} is missing: apt-get install {'valgrind' if tool == 'valgrind' else 'binutils'}")
     costs = per_sample(args.myriad, args)
     print(f"{sum(costs.values()):.0f} instructions a sample ({args.scene}, {args.sampler}, {args.flags})")
     if args.asm:
