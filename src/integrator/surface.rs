@@ -24,7 +24,7 @@ impl Surface {
     /// `material`'s BSDF at `hit` (textures looked up, normal mapped), reached from outside
     /// its volume when `entering`, its glass taken as smooth when `as_smooth`; `None` where
     /// it scatters nothing.
-    #[inline]
+    #[inline(always)]
     pub fn at(scene: &Scene, material: &Material, hit: &SurfaceHit, entering: bool, as_smooth: bool) -> Option<Self> {
         let bsdf = material.bsdf(hit.uv, &scene.images, entering, as_smooth)?;
         let n_shading = material.mapped_normal(
@@ -44,7 +44,7 @@ impl Surface {
     }
 
     /// The BSDF seen from `wo`.
-    #[inline]
+    #[inline(always)]
     pub fn seen_from(&self, wo: Vec3A) -> ShadingPoint {
         ShadingPoint::new(self.bsdf, self.n_geom, self.n_shading, self.tangent, wo)
     }
