@@ -373,7 +373,7 @@ impl Geometry {
 
     /// True when something not cut out blocks the segment from `origin` to
     /// `origin + dir·t_max`.
-    #[inline]
+    #[inline(always)]
     pub fn occluded(&self, ray: &Ray, t_max: f32, cut_out: impl Fn(u32, Vec2) -> bool) -> bool {
         if !self.masked {
             return self.accel.occluded(ray, t_max, |_, _, _, _| true);
