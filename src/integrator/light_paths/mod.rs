@@ -230,10 +230,17 @@ impl LightPaths {
     /// Traces the light path of one camera sample and returns what it adds to the image,
     /// weighted against the path tracer (per sample of the whole image: a pixel's mean adds
     /// its splats' sum over its samples per pixel).
+    #[inline(always)]
     pub fn trace(&self, scene: &Scene, stream: &SampleStream, counters: &mut RayCounters) -> Option<Splat> {
+        // Seven camera samples in eight trace none: they skip the call.
         if stream.get_1d(0, Dim::LightPathLight, 1) >= RATE {
             return None;
         }
+        self.trace_one(scene, stream, counters)
+    }
+
+    /// [`trace`](Self::trace) for a camera sample that traces a light path.
+    fn trace_one(&self, scene: &Scene, stream: &SampleStream, counters: &mut RayCounters) -> Option<Splat> {
         counters.light_paths += 1;
         let k = self.choose(stream.get_1d(0, Dim::LightPathLight, 0));
         let (id, light_pmf) = (self.ids[k], self.pmf(k));
