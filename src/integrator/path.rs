@@ -9,7 +9,7 @@
 
 use super::direct::estimate_direct;
 use super::guided::Scattering;
-use super::light_paths::{CameraVertex, Highlight, LightPaths};
+use super::light_paths::{Highlight, LightPaths};
 use super::mnee::{AtVertex, GlassChain, MAX_CASTERS};
 use super::surface::Surface;
 use super::timing::{Stopwatch, timed};
@@ -285,8 +285,9 @@ impl Tracer<'_> {
         let mut medium = Rgb::ZERO;
         // The refractions through smooth glass since the path last left a receiver.
         let mut chain = GlassChain::default();
-        // The camera hit as light paths see it (where they may reach it).
-        let mut x1: Option<CameraVertex> = None;
+        // The camera hit where light paths may reach it (point, geometric normal), projected
+        // into the image only where the path meets a glossy surface next.
+        let mut first: Option<(Vec3A, Vec3A)> = None;
         // Whether path guiding learns from this path's vertices (`tally.trail`).
         let recording = tally.seen.guide_records().is_some();
         let mut depth = 0u32;
@@ -332,14 +333,14 @@ impl Tracer<'_> {
             // the next ray meets one.
             let ctx = ShadingContext::of(hit.p, &sp);
             // Light paths sample camera → x1 → glossy x2 → point or spot light too.
-            let highlight = light_paths.and_then(|paths| match (depth, x1, prev) {
+            let highlight = light_paths.and_then(|paths| match (depth, first, prev) {
                 (0, ..) => {
-                    x1 = paths.camera_vertex(scene, &hit, &surface);
+                    first = surface.can_be_x1().then_some((hit.p, hit.n_geom));
                     None
                 }
-                (1, Some(x1), Some(prev)) if surface.can_be_x2() => {
-                    Some(Highlight { paths, x1, pdf_x1: prev.bsdf_pdf, surface, wo })
-                }
+                (1, Some((p, n)), Some(prev)) if surface.can_be_x2() => paths
+                    .camera_vertex(scene, p, n)
+                    .map(|x1| Highlight { paths, x1, pdf_x1: prev.bsdf_pdf, surface, wo }),
                 _ => None,
             });
             // Where next-event estimation also looks through smooth glass: off it, outside it.

@@ -220,11 +220,12 @@ impl LightPaths {
         Some((proj, CameraVertex { n_geom, importance }))
     }
 
-    /// The first vertex of a camera path as light paths see it (`None` where they cannot
-    /// reach it: outside the image, or where it transmits).
+    /// The first vertex of a camera path, at `p` with geometric normal `n_geom` on a surface
+    /// that can be x1 ([`Surface::can_be_x1`]), as light paths see it (`None` outside the
+    /// image).
     #[inline]
-    pub fn camera_vertex(&self, scene: &Scene, hit: &SurfaceHit, surface: &Surface) -> Option<CameraVertex> {
-        surface.can_be_x1().then(|| self.projection(scene, hit.p, hit.n_geom).map(|(_, v)| v)).flatten()
+    pub fn camera_vertex(&self, scene: &Scene, p: Vec3A, n_geom: Vec3A) -> Option<CameraVertex> {
+        self.projection(scene, p, n_geom).map(|(_, v)| v)
     }
 
     /// Traces the light path of one camera sample and returns what it adds to the image,
