@@ -24,8 +24,9 @@ use crate::scene::Scene;
 /// The contribution of one chosen light, divided by its selection probability `pmf`, through
 /// the volume of absorption `medium` the point lies in; where smooth glass blocks an emissive
 /// surface or a point or directional light, the light that reaches the point through it
-/// ([`mnee`], as `glass` allows). `observe(c, visible)` hears of each shadow ray: the
-/// luminance of the unshadowed, unweighted contribution and whether it got through.
+/// ([`mnee`], as `glass` allows). `u()` draws the two numbers the light's sample takes;
+/// `observe(c, visible)` hears of each shadow ray: the luminance of the unshadowed,
+/// unweighted contribution and whether it got through.
 #[inline]
 #[allow(clippy::too_many_arguments)]
 fn light_contribution(
@@ -37,7 +38,7 @@ fn light_contribution(
     medium: Rgb,
     glass: mnee::AtVertex,
     highlight: Option<&Highlight>,
-    u: [u64; 2],
+    u: impl FnOnce() -> [u64; 2],
     counters: &mut RayCounters,
     observe: impl FnOnce(f32, bool),
 ) -> Rgb {
@@ -45,6 +46,9 @@ fn light_contribution(
     if glass.smooth && light.is_delta() {
         return Rgb::ZERO;
     }
+    // A point, spot or directional light takes no numbers: they are not drawn (numbers have
+    // addresses, so leaving one out changes no other).
+    let u = if light.is_delta() { [0; 2] } else { u() };
     let Some(ls) = light.sample_li(p, u, &scene.images) else { return Rgb::ZERO };
     let sp = &scattering.sp;
     // BSDF sampling cannot find a delta light: its density there is not needed.
@@ -140,14 +144,14 @@ pub fn estimate_direct(
             .iter()
             .enumerate()
             .map(|(i, _)| {
-                let u = stream.get_2d_u64(bounce, Dim::LightPoint, i as u32);
+                let u = || stream.get_2d_u64(bounce, Dim::LightPoint, i as u32);
                 let rays = &mut tally.rays;
                 light_contribution(scene, i as u32, 1.0, scattering, p, medium, glass, highlight, u, rays, |_, _| {})
             })
             .fold(Rgb::ZERO, |a, b| a + b),
         Some(sampler) => {
             let u_select = stream.get_1d_u64(bounce, Dim::LightSelect, 0);
-            let u_point = stream.get_2d_u64(bounce, Dim::LightPoint, 0);
+            let u_point = || stream.get_2d_u64(bounce, Dim::LightPoint, 0);
             let rays = &mut tally.rays;
             let choice = timed(rays.timing, &mut rays.time.choice, || {
                 sampler.sample_prefetching(ctx, diffuse, u_select, &scene.lights)
