@@ -21,10 +21,18 @@ use crate::math::{Rgb, Vec3A, luminance, power_heuristic};
 use crate::sampling::{Dim, SampleStream};
 use crate::scene::Scene;
 
+/// The two numbers light `id`'s sample takes (draw `sub` of [`Dim::LightPoint`]): none for
+/// a point, spot or directional light, which are not drawn (numbers have addresses, so
+/// leaving one out changes no other).
+#[inline]
+fn light_numbers(scene: &Scene, id: u32, stream: &SampleStream, bounce: u32, sub: u32) -> [u64; 2] {
+    if scene.lights[id as usize].is_delta() { [0; 2] } else { stream.get_2d_u64(bounce, Dim::LightPoint, sub) }
+}
+
 /// The contribution of one chosen light, divided by its selection probability `pmf`, through
 /// the volume of absorption `medium` the point lies in; where smooth glass blocks an emissive
 /// surface or a point or directional light, the light that reaches the point through it
-/// ([`mnee`], as `glass` allows). `u()` draws the two numbers the light's sample takes;
+/// ([`mnee`], as `glass` allows), with the two numbers `u` ([`light_numbers`]).
 /// `observe(c, visible)` hears of each shadow ray: the luminance of the unshadowed,
 /// unweighted contribution and whether it got through.
 #[inline]
@@ -38,7 +46,7 @@ fn light_contribution(
     medium: Rgb,
     glass: mnee::AtVertex,
     highlight: Option<&Highlight>,
-    u: impl FnOnce() -> [u64; 2],
+    u: [u64; 2],
     counters: &mut RayCounters,
     observe: impl FnOnce(f32, bool),
 ) -> Rgb {
@@ -46,9 +54,6 @@ fn light_contribution(
     if glass.smooth && light.is_delta() {
         return Rgb::ZERO;
     }
-    // A point, spot or directional light takes no numbers: they are not drawn (numbers have
-    // addresses, so leaving one out changes no other).
-    let u = if light.is_delta() { [0; 2] } else { u() };
     let Some(ls) = light.sample_li(p, u, &scene.images) else { return Rgb::ZERO };
     let sp = &scattering.sp;
     // BSDF sampling cannot find a delta light: its density there is not needed.
@@ -144,14 +149,14 @@ pub fn estimate_direct(
             .iter()
             .enumerate()
             .map(|(i, _)| {
-                let u = || stream.get_2d_u64(bounce, Dim::LightPoint, i as u32);
+                let u = light_numbers(scene, i as u32, stream, bounce, i as u32);
                 let rays = &mut tally.rays;
                 light_contribution(scene, i as u32, 1.0, scattering, p, medium, glass, highlight, u, rays, |_, _| {})
             })
             .fold(Rgb::ZERO, |a, b| a + b),
         Some(sampler) => {
             let u_select = stream.get_1d_u64(bounce, Dim::LightSelect, 0);
-            let u_point = || stream.get_2d_u64(bounce, Dim::LightPoint, 0);
+
             let rays = &mut tally.rays;
             let choice = timed(rays.timing, &mut rays.time.choice, || {
                 sampler.sample_prefetching(ctx, diffuse, u_select, &scene.lights)
@@ -162,7 +167,8 @@ pub fn estimate_direct(
                     let Tally { rays, seen, .. } = tally;
                     let observe = |c, visible| seen.record_light_sample(strategy, ctx, s.light, c, visible);
                     let (id, pmf) = (s.light.0, s.pmf);
-                    light_contribution(scene, id, pmf, scattering, p, medium, glass, highlight, u_point, rays, observe)
+                    let u = light_numbers(scene, id, stream, bounce, 0);
+                    light_contribution(scene, id, pmf, scattering, p, medium, glass, highlight, u, rays, observe)
                 }
                 None => Rgb::ZERO,
             }
