@@ -156,7 +156,6 @@ pub fn estimate_direct(
             .fold(Rgb::ZERO, |a, b| a + b),
         Some(sampler) => {
             let u_select = stream.get_1d_u64(bounce, Dim::LightSelect, 0);
-
             let rays = &mut tally.rays;
             let choice = timed(rays.timing, &mut rays.time.choice, || {
                 sampler.sample_prefetching(ctx, diffuse, u_select, &scene.lights)
