@@ -17,6 +17,8 @@
 //! time, so both see the same intervals bit for bit. NaN and negative weights count as 0; when some
 //! weights are infinite, they share the range equally and the finite ones get nothing.
 
+use wide::{CmpEq, CmpGt, f32x8};
+
 /// Number of equally likely values of a selection number (`u64`): 2⁶⁴.
 pub const RANGE: u128 = 1 << 64;
 
@@ -95,19 +97,6 @@ impl Split {
         Self::with_totals(range, total, positive, infinite)
     }
 
-    /// [`Split::new`] over an array, with the weights as the rule counts them, for
-    /// [`Split::next_counted`]: each weight is cleaned once, all of them side by side (the
-    /// light tree's nodes, where this is most of a level's work).
-    #[inline(always)]
-    pub fn over<const N: usize>(range: u128, weights: &[f32; N]) -> Option<(Self, [f64; N])> {
-        // The same test as `new`'s infinite total, without the sum.
-        let infinite = weights.contains(&f32::INFINITY);
-        let counted = if infinite { weights.map(|w| clean(w, true)) } else { weights.map(|w| clean(w, false)) };
-        let total = counted.iter().fold(0.0f64, |total, &c| total + c);
-        let positive = counted.iter().map(|&c| (c > 0.0) as u32).sum();
-        Self::with_totals(range, total, positive, infinite).map(|s| (s, counted))
-    }
-
     #[inline(always)]
     fn with_totals(range: u128, total: f64, positive: u32, infinite: bool) -> Option<Self> {
         debug_assert!(range <= RANGE);
@@ -123,12 +112,7 @@ impl Split {
     /// The interval of the next weight: `start..end` as (start, end).
     #[inline(always)]
     pub fn next(&mut self, w: f32) -> (u128, u128) {
-        self.next_counted(clean(w, self.infinite))
-    }
-
-    /// [`Split::next`] for a weight as the rule counts it (from [`Split::over`]).
-    #[inline(always)]
-    pub fn next_counted(&mut self, c: f64) -> (u128, u128) {
+        let c = clean(w, self.infinite);
         let start = self.end;
         if c > 0.0 {
             self.acc += c;
@@ -146,6 +130,96 @@ impl Split {
             };
         }
         (start, self.end)
+    }
+}
+
+/// Bits of the fixed-point shares a [`NodeSplit`] divides a node's values by.
+const SHARE_BITS: u32 = 26;
+/// What a [`NodeSplit`]'s shares sum to, up to rounding: just below 2^[`SHARE_BITS`], so
+/// that f32 rounding (a few parts in 2²⁴) and the one share each tiny weight is given cannot
+/// take the sum past it, and shares × values per share never pass the range. The
+/// remainder, up to 2⁻¹⁹ of the range, goes to the last positive weight.
+const SHARES: f32 = ((1u32 << SHARE_BITS) - 128) as f32;
+
+/// How a light tree node shares the values that reached it among its eight children, in
+/// integers and eight-wide: weight `i`'s interval ends at `acc(≤ i) · ⌊range / 2²⁶⌋`, with
+/// `acc` the running sum of the weights' fixed-point shares (26 bits in all, at least 1 for
+/// a positive weight), and the last positive weight's at `range`, which takes the remainder.
+/// As with [`Split`], every positive weight owns a value, a zero weight (NaN, negative) none,
+/// infinite weights share the range equally, the intervals tile it, and the pmf is the
+/// realised interval width, exact; but no child costs f64 or 128-bit work (Split's running
+/// sums in f64 and its `u128` bounds were most of a tree level's choice). Below 2²⁶ values
+/// (a node reached with probability under 2⁻³⁸) each positive weight but the last gets one.
+#[derive(Clone, Copy, Debug)]
+pub struct NodeSplit {
+    /// Per weight where its interval ends, for those before the last positive one.
+    ends: [u64; 8],
+    /// The last positive weight: its interval and those after it end at `range`.
+    last: usize,
+    range: u128,
+}
+
+impl NodeSplit {
+    /// Prepares to split `range` (at most 2⁶⁴) among `weights`; `None` when none is positive.
+    #[inline(always)]
+    pub fn over(range: u128, weights: &[f32; 8]) -> Option<Self> {
+        debug_assert!(range <= RANGE);
+        let (shares, positive) = Self::shares(f32x8::from(*weights));
+        let last = 7usize.checked_sub(positive.leading_zeros() as usize - 24)?;
+        let per_share = (range >> SHARE_BITS) as u64;
+        let (mut acc, mut ends) = (0u64, [0u64; 8]);
+        if per_share > 0 {
+            for (end, &q) in ends.iter_mut().zip(&shares).take(last) {
+                acc += q as u64;
+                *end = acc * per_share;
+            }
+            debug_assert!(acc <= 1 << SHARE_BITS, "shares sum to {acc} before the last");
+        } else {
+            // Too few values to share out: one to each positive weight, while they last.
+            for (end, &q) in ends.iter_mut().zip(&shares).take(last) {
+                acc += (q > 0) as u64;
+                *end = acc.min(range as u64);
+            }
+        }
+        Some(Self { ends, last, range })
+    }
+
+    /// Fixed-point shares of `weights` (see [`SHARES`]), 0 for those that count as 0, and
+    /// the mask of the positive ones (bit i: weight i).
+    #[inline(always)]
+    fn shares(weights: f32x8) -> ([i32; 8], u32) {
+        let zero = f32x8::ZERO;
+        let infinite = weights.cmp_eq(f32x8::splat(f32::INFINITY));
+        if infinite.any() {
+            let each = f32x8::splat((SHARES / infinite.move_mask().count_ones() as f32).floor());
+            return (infinite.blend(each, zero).fast_trunc_int().to_array(), infinite.move_mask() as u32);
+        }
+        let positive = weights.cmp_gt(zero);
+        let mut counted = positive.blend(weights, zero);
+        let mut per_weight = SHARES / counted.reduce_add();
+        if !per_weight.is_normal() {
+            // Weights whose sum overflows (an eighth of each cannot) or so small that
+            // SHARES / sum does (2⁶⁴ times each cannot): scaled by a power of two, exactly.
+            counted = counted * if per_weight == 0.0 { 0.125 } else { 2f32.powi(64) };
+            per_weight = SHARES / counted.reduce_add();
+        }
+        let scaled = (counted * per_weight).min(f32x8::splat(SHARES)).max(f32x8::ONE);
+        (positive.blend(scaled, zero).fast_trunc_int().to_array(), positive.move_mask() as u32)
+    }
+
+    /// The weight whose interval holds `u` (`u < range`), and its interval as (start, end).
+    #[inline(always)]
+    pub fn find(&self, u: u128) -> (usize, (u128, u128)) {
+        let u = u as u64;
+        let k = self.ends[..self.last].iter().map(|&end| (end <= u) as usize).sum();
+        (k, self.interval(k))
+    }
+
+    /// The interval of weight `k` as (start, end).
+    #[inline(always)]
+    pub fn interval(&self, k: usize) -> (u128, u128) {
+        let end = |i: usize| if i < self.last { self.ends[i] as u128 } else { self.range };
+        (if k == 0 { 0 } else { end(k - 1) }, end(k))
     }
 }
 
@@ -385,26 +459,53 @@ mod tests {
         weights.iter().map(|&w| s.next(w)).collect()
     }
 
+    /// The intervals of a node's `weights` over `range`, in order, each also found by
+    /// [`NodeSplit::find`] from its first and last value.
+    fn node_intervals(range: u128, weights: &[f32; 8]) -> Option<Vec<(u128, u128)>> {
+        let split = NodeSplit::over(range, weights)?;
+        let c: Vec<_> = (0..8).map(|k| split.interval(k)).collect();
+        for (k, &(a, b)) in c.iter().enumerate().filter(|(_, (a, b))| b > a) {
+            assert_eq!(split.find(a), (k, (a, b)), "{weights:?} over {range}");
+            assert_eq!(split.find(b - 1), (k, (a, b)), "{weights:?} over {range}");
+        }
+        Some(c)
+    }
+
     #[test]
-    fn an_array_splits_as_its_sequence() {
-        let cases: [[f32; 8]; 6] = [
+    fn a_node_split_tiles_the_range_and_follows_the_weights() {
+        let cases: [[f32; 8]; 7] = [
             [1.0, 0.0, 3.5, 2.0, 0.0, 1e-30, 7.0, 0.25],
             [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 4.0],
             [f32::NAN, -1.0, 2.0, f32::INFINITY, 0.0, 5.0, f32::INFINITY, 1.0],
             [3e38, 3e38, 3e38, 1e-38, 0.0, 1.0, 2.0, 3.0],
             [1.0; 8],
-            [0.0, -2.0, f32::NAN, 0.0, 0.0, 0.0, 0.0, 0.0],
+            [1e-45, 0.0, 1e-45, 0.0, 0.0, 0.0, 0.0, 0.0],
+            [5.0, 1.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0],
         ];
         for w in cases {
+            let infinite = w.contains(&f32::INFINITY);
+            let counted = w.map(|x| if infinite { (x == f32::INFINITY) as u32 as f64 } else { x.max(0.0) as f64 });
+            let total: f64 = counted.iter().sum();
             for range in [RANGE, RANGE - 1, 1 << 40, 12345, 8, 3, 1] {
-                let Some((mut split, counted)) = Split::over(range, &w) else {
-                    assert!(Split::new(range, w).is_none(), "{w:?}");
-                    continue;
-                };
-                let by_array: Vec<_> = counted.iter().map(|&c| split.next_counted(c)).collect();
-                assert_eq!(by_array, intervals(range, &w), "{w:?} over {range}");
+                let c = node_intervals(range, &w).unwrap();
+                assert_eq!((c[0].0, c[7].1), (0, range), "{w:?} over {range}");
+                assert!(c.windows(2).all(|p| p[0].1 == p[1].0), "{w:?} over {range}: {c:?}");
+                let positive = counted.iter().filter(|&&x| x > 0.0).count() as u128;
+                for (i, &(a, b)) in c.iter().enumerate() {
+                    if counted[i] == 0.0 || range >= positive {
+                        assert_eq!(b > a, counted[i] > 0.0, "{w:?} over {range}: {i}");
+                    }
+                    if range == RANGE {
+                        let p = (b - a) as f64 / RANGE as f64;
+                        assert!((p - counted[i] / total).abs() < 2e-6, "{w:?}: {i}: {p}");
+                    }
+                }
             }
         }
+        assert!(NodeSplit::over(RANGE, &[0.0, -2.0, f32::NAN, 0.0, 0.0, 0.0, 0.0, 0.0]).is_none());
+        // Three values among four positive weights: the first three get one each.
+        let c = node_intervals(3, &[1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0]).unwrap();
+        assert_eq!(c[..4], [(0, 1), (1, 2), (2, 3), (3, 3)]);
     }
 
     #[test]

@@ -8,7 +8,7 @@
 //!   is a chain of dependent steps, so fewer, wider levels are what makes it fast: against
 //!   4-wide nodes, see the performance page.
 //! - **One 64-bit number, split exactly down the tree**: each node shares the values that
-//!   reached it among its children by [`Split`], and passes the chosen child's run on, so
+//!   reached it among its children by [`NodeSplit`], and passes the chosen child's run on, so
 //!   the stratification of `u` survives, 20+ levels do not collapse neighbouring `u` onto one
 //!   light, and a light's pmf is exactly the share of the 2⁶⁴ values that reach it.
 //! - **The pmf by replaying the light's path**: a 128-bit trail (3 bits per level) per light
@@ -43,7 +43,7 @@ use self::compact::{Node, Quantizer};
 use super::{LightSampler, SampledLight, ShadingContext, prefetch};
 use crate::light::{Lanes, Light, LightId};
 use crate::math::Vec3A;
-use crate::math::distribution::{RANGE, Split, even_interval, even_pick, probability};
+use crate::math::distribution::{NodeSplit, RANGE, even_interval, even_pick, probability};
 
 /// Children per node.
 pub const WIDTH: usize = 8;
@@ -140,7 +140,7 @@ fn lobe_weighted(imp: Lanes, lobe_weights: Lanes) -> Lanes {
 
 /// Weights of a node's children at `ctx` (0 for empty slots; weighed by the BSDF's lobes
 /// where `ctx` has them), reweighted, and whether `reweight` changed them. How selection
-/// values split among them is [`Split::over`] them, asked for only where the node does not
+/// values split among them is [`NodeSplit::over`] them, asked for only where the node does not
 /// end the descent uniformly ([`LightTree::flat`]).
 #[inline(always)]
 fn children_weights(
@@ -350,11 +350,8 @@ impl LightTree {
                 let light = self.order[(self.spans[node].0 + k) as usize];
                 return Some(SampledLight { light: LightId(light), pmf: probability(width) });
             }
-            let (mut split, counted) = Split::over(range, &imp)?;
             // The child whose interval holds u (the intervals tile the range, so one does).
-            let (k, (start, end)) = (counted.iter().map(|&c| split.next_counted(c)).enumerate())
-                .find(|(_, (_, end))| u < *end)
-                .expect("intervals tile");
+            let (k, (start, end)) = NodeSplit::over(range, &imp)?.find(u);
             (u, range) = (u - start, end - start);
             let child = n.children[k];
             if child & LEAF != 0 {
@@ -447,10 +444,10 @@ impl LightTree {
                 let (a, b) = even_interval(k, m, range);
                 return (start + a, start + b);
             }
-            let Some((mut split, counted)) = Split::over(range, &imp) else {
+            let Some(split) = NodeSplit::over(range, &imp) else {
                 return (start, start);
             };
-            let (a, b) = counted[..=k].iter().map(|&c| split.next_counted(c)).last().expect("k < WIDTH");
+            let (a, b) = split.interval(k);
             (start, range) = (start + a, b - a);
             let child = n.children[k];
             if child & LEAF != 0 || range == 0 {
