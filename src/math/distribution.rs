@@ -1,9 +1,10 @@
 //! Choosing an index in proportion to weights with one 64-bit random number, exactly.
 //!
-//! Owns: [`Split`], the one rule every light sampler uses to share the 2⁶⁴ equally likely
-//! values of a selection number among weights, and [`Distribution1D`], a table of that rule
-//! (the `power` sampler), and [`Table16`], the rule over 2¹⁶ values for a few positive weights
-//! (`cells`' per-cell tables). A weight's *interval* is the run of values that choose it, so its
+//! Owns: [`Split`], the rule light samplers use to share the 2⁶⁴ equally likely values of a
+//! selection number among a list of weights, [`Distribution1D`], a table of that rule (the
+//! `power` sampler), [`Table16`], the rule over 2¹⁶ values for a few positive weights
+//! (`cells`' per-cell tables), and [`NodeSplit`], a light tree node's split among its eight
+//! children in fixed-point integers with the same guarantees. A weight's *interval* is the run of values that choose it, so its
 //! probability is exactly `interval width / 2⁶⁴`: the pmf a sampler reports is the probability it
 //! realises, not an approximation of it (an f32 CDF drawn with a 24-bit number, as before, gave
 //! each of 10⁶ lights 16 or 17 of 2²⁴ values, up to 5 % off its reported pmf, and never chose a
