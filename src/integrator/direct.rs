@@ -15,18 +15,22 @@ use super::mnee;
 use super::timing::{Stopwatch, timed};
 use super::{RayCounters, Tally};
 use crate::geometry::{Ray, offset_ray_origin};
-use crate::light::Light;
+use crate::light::{Light, SampleBits};
 use crate::light_sampler::{LightStrategy, ShadingContext};
 use crate::math::{Rgb, Vec3A, luminance, power_heuristic};
 use crate::sampling::{Dim, SampleStream};
 use crate::scene::Scene;
 
-/// The two numbers light `id`'s sample takes (draw `sub` of [`Dim::LightPoint`]): none for
-/// a point, spot or directional light, which are not drawn (numbers have addresses, so
-/// leaving one out changes no other).
-#[inline]
+/// The two numbers light `id`'s sample takes (draw `sub` of [`Dim::LightPoint`]), only the
+/// bits it reads ([`Light::sample_bits`]): none for a point, spot or directional light
+/// (numbers have addresses, so leaving one out changes no other).
+#[inline(always)]
 fn light_numbers(scene: &Scene, id: u32, stream: &SampleStream, bounce: u32, sub: u32) -> [u64; 2] {
-    if scene.lights[id as usize].is_delta() { [0; 2] } else { stream.get_2d_u64(bounce, Dim::LightPoint, sub) }
+    match scene.lights[id as usize].sample_bits() {
+        SampleBits::None => [0; 2],
+        SampleBits::Top => stream.get_2d_u64_top(bounce, Dim::LightPoint, sub),
+        SampleBits::All => stream.get_2d_u64(bounce, Dim::LightPoint, sub),
+    }
 }
 
 /// The contribution of one chosen light, divided by its selection probability `pmf`, through

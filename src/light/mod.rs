@@ -98,6 +98,17 @@ pub enum Light {
     Sun(SunLight),
 }
 
+/// What of its two 64-bit numbers a light's sample reads ([`Light::sample_bits`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SampleBits {
+    /// None: a delta light.
+    None,
+    /// The top 32 bits of each (area lights take the top 24 as floats).
+    Top,
+    /// All 64 bits.
+    All,
+}
+
 impl Light {
     /// Samples the light as seen from `p` with two 64-bit numbers (area lights take their
     /// top 24 bits as floats in `[0,1)²`); `None` when it cannot reach `p`. Emission
@@ -252,6 +263,17 @@ impl Light {
     #[inline]
     pub fn is_delta(&self) -> bool {
         matches!(self, Light::Point(_) | Light::Spot(_) | Light::Distant(_))
+    }
+
+    /// What of [`Light::sample_li`]'s two 64-bit numbers it reads: none for a delta light,
+    /// all 64 bits for the environment (its map is drawn exactly), the top 32 for the rest.
+    #[inline]
+    pub fn sample_bits(&self) -> SampleBits {
+        match self {
+            _ if self.is_delta() => SampleBits::None,
+            Light::Environment(_) => SampleBits::All,
+            _ => SampleBits::Top,
+        }
     }
 
     /// Short name of the kind, for reports.

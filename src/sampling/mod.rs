@@ -112,6 +112,14 @@ impl SampleStream {
         [((x as u64) << 32) | (low >> 32), ((y as u64) << 32) | (low & 0xffff_ffff)]
     }
 
+    /// [`get_2d_u64`](Self::get_2d_u64)'s numbers with their hashed low 32 bits left 0, for
+    /// a user that reads only the top ones.
+    #[inline]
+    pub fn get_2d_u64_top(&self, bounce: u32, dim: Dim, sub: u32) -> [u64; 2] {
+        let (x, y) = sobol::sample_2d(self.sample_reversed, self.seed(bounce, dim as u64, sub));
+        [(x as u64) << 32, (y as u64) << 32]
+    }
+
     /// Two numbers in `[0,1)²` for a 2D `dim`, stratified together.
     #[inline]
     pub fn get_2d(&self, bounce: u32, dim: Dim, sub: u32) -> Vec2 {
