@@ -225,6 +225,10 @@ fn survives_roulette(stream: &SampleStream, depth: u32, beta: &mut Rgb) -> bool 
         return true;
     }
     let survive = beta.max_element().sqrt().sqrt().min(1.0);
+    // A path that survives for certain draws no number (its draw could not end it).
+    if survive == 1.0 {
+        return true;
+    }
     if stream.get_1d(depth, Dim::RussianRoulette, 0) >= survive {
         return false;
     }
