@@ -4,19 +4,20 @@
 //! selection number among a list of weights, [`Distribution1D`], a table of that rule (the
 //! `power` sampler), [`Table16`], the rule over 2¹⁶ values for a few positive weights
 //! (`cells`' per-cell tables), and [`NodeSplit`], a light tree node's split among its eight
-//! children in fixed-point integers with the same guarantees. A weight's *interval* is the run of values that choose it, so its
-//! probability is exactly `interval width / 2⁶⁴`: the pmf a sampler reports is the probability it
-//! realises, not an approximation of it (an f32 CDF drawn with a 24-bit number, as before, gave
-//! each of 10⁶ lights 16 or 17 of 2²⁴ values, up to 5 % off its reported pmf, and never chose a
-//! light below 2⁻²⁴).
+//! children in fixed-point integers with the same guarantees. A weight's *interval* is the
+//! run of values that choose it, so its probability is exactly `interval width / 2⁶⁴`: the
+//! pmf a sampler reports is the probability it realises, not an approximation of it (an f32
+//! CDF drawn with a 24-bit number, as before, gave each of 10⁶ lights 16 or 17 of 2²⁴
+//! values, up to 5 % off its reported pmf, and never chose a light below 2⁻²⁴).
 //!
-//! The rule: with `P` positive weights summing to `T` over a range of `R` values, the interval of
-//! weight `i` ends at `positive(≤ i) + ⌊acc(≤ i) / T · (R − P)⌋`, and the last positive interval
-//! ends at `R`. Every positive weight thus owns at least one value (so anything with a positive
-//! weight can be chosen, as MIS assumes), a zero weight owns none, and the intervals tile the
-//! range. Weights are f32 summed in f64 in index order, the same order at sampling and at pmf
-//! time, so both see the same intervals bit for bit. NaN and negative weights count as 0; when some
-//! weights are infinite, they share the range equally and the finite ones get nothing.
+//! [`Split`]'s rule: with `P` positive weights summing to `T` over a range of `R` values,
+//! the interval of weight `i` ends at `positive(≤ i) + ⌊acc(≤ i) / T · (R − P)⌋`, and the
+//! last positive interval ends at `R`. Every positive weight thus owns at least one value
+//! (so anything with a positive weight can be chosen, as MIS assumes), a zero weight owns
+//! none, and the intervals tile the range. Weights are f32 summed in f64 in index order, the
+//! same order at sampling and at pmf time, so both see the same intervals bit for bit. NaN
+//! and negative weights count as 0; when some weights are infinite, they share the range
+//! equally and the finite ones get nothing.
 
 use wide::{CmpEq, CmpGt, f32x8};
 
@@ -166,7 +167,10 @@ impl NodeSplit {
     pub fn over(range: u128, weights: &[f32; 8]) -> Option<Self> {
         debug_assert!(range <= RANGE);
         let (shares, positive) = Self::shares(f32x8::from(*weights));
-        let last = 7usize.checked_sub(positive.leading_zeros() as usize - 24)?;
+        if positive == 0 {
+            return None;
+        }
+        let last = (u32::BITS - 1 - positive.leading_zeros()) as usize;
         let per_share = (range >> SHARE_BITS) as u64;
         let (mut acc, mut ends) = (0u64, [0u64; 8]);
         if per_share > 0 {
