@@ -17,15 +17,20 @@ use glam::Vec3A;
 
 use super::traverse::Group;
 
-/// Nine coordinate planes (x0, y0, z0, x1, …, z2), each `len + PAD` long.
+/// Nine coordinate planes (x0, y0, z0, x1, …, z2) in chunks of [`CHUNK`] slots: chunk `c`
+/// holds plane `k` of slots `c·CHUNK + j`, `j < STORED`, at `(9c + k)·STORED + j`.
 pub struct Triangles {
     planes: Vec<f32>,
     len: usize,
 }
 
-/// Zeros after each plane, so that an eight-wide load starting at any slot of a group stays
-/// inside it (a group's highest bit is a real slot; a load reads at most 7 past it).
-const PAD: usize = 8;
+/// Slots a chunk owns.
+const CHUNK: usize = 256;
+/// Slots a chunk stores a plane: its own and copies of the next chunk's first 24 (zeros past
+/// the last triangle), so that a group's 24 slots from any slot of the chunk lie in it. A
+/// group's planes are then one pointer and constant offsets: a ray sets up no pointer per
+/// plane, which the traversal loop kept on the stack.
+const STORED: usize = CHUNK + 24;
 
 /// Möller–Trumbore: (t, b1, b2) when the ray `o + t·d` meets triangle `v` with `t ∈ (tmin, tmax)`.
 /// The test of builds without AVX2, and the reference the wide test is checked against.
@@ -61,16 +66,23 @@ impl Triangles {
     /// Stores `tris` in this order.
     pub fn new(tris: &[[Vec3A; 3]]) -> Self {
         let len = tris.len();
-        let stride = len + PAD;
-        let mut planes = vec![0.0f32; 9 * stride];
-        for (i, t) in tris.iter().enumerate() {
-            for (k, v) in t.iter().enumerate() {
-                for (a, c) in v.to_array().into_iter().enumerate() {
-                    planes[(3 * k + a) * stride + i] = c;
+        let mut planes = vec![0.0f32; len.div_ceil(CHUNK) * 9 * STORED];
+        for (c, chunk) in planes.chunks_exact_mut(9 * STORED).enumerate() {
+            for (j, t) in tris.iter().skip(c * CHUNK).take(STORED).enumerate() {
+                for (k, v) in t.iter().enumerate() {
+                    for (a, x) in v.to_array().into_iter().enumerate() {
+                        chunk[(3 * k + a) * STORED + j] = x;
+                    }
                 }
             }
         }
         Self { planes, len }
+    }
+
+    /// Where plane 0 of `slot` is stored (plane k: `k·STORED` further).
+    #[inline(always)]
+    fn at(slot: usize) -> usize {
+        slot / CHUNK * 9 * STORED + slot % CHUNK
     }
 
     /// Number of triangles.
@@ -86,8 +98,8 @@ impl Triangles {
     /// The vertices of triangle `slot`.
     #[inline]
     pub fn vertices(&self, slot: u32) -> [Vec3A; 3] {
-        let (stride, i) = (self.len + PAD, slot as usize);
-        let c = |k: usize| self.planes[k * stride + i];
+        let i = Self::at(slot as usize);
+        let c = |k: usize| self.planes[i + k * STORED];
         [Vec3A::new(c(0), c(1), c(2)), Vec3A::new(c(3), c(4), c(5)), Vec3A::new(c(6), c(7), c(8))]
     }
 
@@ -135,6 +147,8 @@ impl Triangles {
     fn for_each_hit(&self, o: Vec3A, d: Vec3A, group: Group, mut f: impl FnMut(u32, f32, f32, f32) -> bool) -> bool {
         #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
         {
+            debug_assert!((group.base as usize) < self.len);
+            let planes = Self::at(group.base as usize);
             // Eight slots a register, the highest eight first.
             for chunk in (0..3).rev() {
                 let lanes = (group.mask >> (8 * chunk)) & 0xff;
@@ -143,8 +157,8 @@ impl Triangles {
                 }
                 let first = group.base + 8 * chunk;
                 // SAFETY: AVX2 is compiled in (and checked at start-up, `crate::cpu`); the
-                // group's slots are real triangles and the planes are padded past the last.
-                let hits = unsafe { self.test8(o, d, first as usize) };
+                // group's base is a real triangle, whose chunk stores 24 slots from it.
+                let hits = unsafe { self.test8(o, d, planes + 8 * chunk as usize) };
                 for slot in (Group { base: first, mask: hits.mask & lanes }).slots() {
                     let l = (slot - first) as usize;
                     if f(slot, hits.t[l], hits.b1[l], hits.b2[l]) {
@@ -162,20 +176,21 @@ impl Triangles {
         }
     }
 
-    /// [`intersect`] (with `tmin` 0, `tmax` ∞) for the eight slots from `first`.
+    /// [`intersect`] (with `tmin` 0, `tmax` ∞) for the eight slots whose plane 0 is stored
+    /// from `at`.
     ///
     /// # Safety
-    /// The CPU must have AVX2, and `first` must be a slot below `len`.
+    /// The CPU must have AVX2, and `at` must be [`Self::at`] of a slot below `len`, plus at
+    /// most 16.
     #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
     #[inline(always)]
-    unsafe fn test8(&self, o: Vec3A, d: Vec3A, first: usize) -> Hits8 {
+    unsafe fn test8(&self, o: Vec3A, d: Vec3A, at: usize) -> Hits8 {
         use std::arch::x86_64::*;
-        debug_assert!(first < self.len);
-        let stride = self.len + PAD;
-        // SAFETY: AVX2 by the caller's contract; each load reads planes[k·stride + first ..+8],
-        // inside plane k because first < len and the plane has PAD more.
+        debug_assert!(at % STORED + 8 <= STORED && at + 8 * STORED + 8 <= self.planes.len());
+        // SAFETY: AVX2 by the caller's contract; each load reads planes[at + k·STORED ..+8],
+        // inside plane k of the slot's chunk, which stores 24 slots from any of its own.
         unsafe {
-            let load = |k: usize| _mm256_loadu_ps(self.planes.as_ptr().add(k * stride + first));
+            let load = |k: usize| _mm256_loadu_ps(self.planes.as_ptr().add(at + k * STORED));
             let (add, sub, mul) = (_mm256_add_ps, _mm256_sub_ps, _mm256_mul_ps);
             let splat = |v: Vec3A| [_mm256_set1_ps(v.x), _mm256_set1_ps(v.y), _mm256_set1_ps(v.z)];
             let v0 = [load(0), load(1), load(2)];
@@ -262,8 +277,9 @@ mod tests {
     fn wide_test_is_the_scalar_test() {
         let mut u = numbers(3);
         let mut p = || Vec3A::new(u(), u(), u()) * 2.0 - 1.0;
-        // Small triangles near the origin, some degenerate (a repeated vertex, collinear).
-        let tris: Vec<[Vec3A; 3]> = (0..61)
+        // Small triangles near the origin, some degenerate (a repeated vertex, collinear);
+        // three chunks, so that some groups start near a chunk's end.
+        let tris: Vec<[Vec3A; 3]> = (0..2 * CHUNK + 61)
             .map(|i| {
                 let c = p() * 0.5;
                 let (a, b) = (c + p() * 0.6, c + p() * 0.6);
@@ -289,7 +305,12 @@ mod tests {
                 d.x = 0.0;
             }
             let tmax = if u() < 0.5 { f32::INFINITY } else { u() * 1.5 };
-            let base = (u() * (tris.len() - 1) as f32) as u32;
+            // One group in four starts within 24 slots of a chunk's end.
+            let base = if u() < 0.25 {
+                (CHUNK - 24 + (u() * 24.0) as usize + CHUNK * (u() * 2.0) as usize) as u32
+            } else {
+                (u() * (tris.len() - 1) as f32) as u32
+            };
             let width = (tris.len() as u32 - base).min(24);
             let mask = ((u() * (1u64 << 24) as f32) as u32 | 1) & ((1u32 << width) - 1).max(1);
             let group = Group { base, mask };
