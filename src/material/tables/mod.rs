@@ -177,9 +177,11 @@ pub fn compute(n: usize) -> (Vec<f32>, Vec<f32>, Vec<f32>) {
 /// Linear interpolation weights of `x ∈ [0,1]` on `N` nodes: (lower node, fraction).
 #[inline]
 fn position<const N: usize>(x: f32) -> (usize, f32) {
-    let f = x.clamp(0.0, 1.0) * (N - 1) as f32;
+    // max/min, not clamp: NaN becomes 0.
+    let f = x.max(0.0).min(1.0) * (N - 1) as f32;
     // Through i32, which x86 converts in one instruction each way (usize takes a dozen).
-    let i = (f as i32).min(N as i32 - 2);
+    // SAFETY: f is finite and in [0, N − 1], so the saturation `as` would add is not needed.
+    let i = unsafe { f.to_int_unchecked::<i32>() }.min(N as i32 - 2);
     (i as usize, f - i as f32)
 }
 
