@@ -8,7 +8,7 @@
 
 use std::sync::OnceLock;
 
-use crate::math::{Rgb, UVec2, Vec2, Vec4};
+use crate::math::{Rgb, UVec2, Vec2, Vec4, node_position};
 
 /// Decoded image pixels.
 #[derive(Clone, Debug, PartialEq)]
@@ -141,11 +141,8 @@ pub fn srgb_to_linear(x: f32) -> f32 {
     let exact = |x: f32| if x <= 0.04045 { x / 12.92 } else { ((x + 0.055) / 1.055).powf(2.4) };
     let table = TABLE.get_or_init(|| std::array::from_fn(|i| exact(i as f32 / 255.0)));
     // Texels are k/255: exact table hits; filtered values interpolate between entries.
-    let f = (x.clamp(0.0, 1.0)) * 255.0;
-    // Through i32, which x86 converts in one instruction each way (usize takes a dozen).
-    let i = (f as i32).min(254);
-    let t = f - i as f32;
-    let (lo, hi) = (table[i as usize], table[i as usize + 1]);
+    let (i, t) = node_position::<256>(x);
+    let (lo, hi) = (table[i], table[i + 1]);
     lo * (1.0 - t) + hi * t
 }
 

@@ -20,6 +20,18 @@ pub type Rgb = Vec3A;
 /// Rec.709 luminance weights: the watts of lights' powers, and what `learned` observes.
 pub const LUMINANCE: Vec3A = Vec3A::new(0.2126, 0.7152, 0.0722);
 
+/// Linear interpolation weights of `x ∈ [0,1]` (clamped; NaN as 0) on `N ≥ 2` evenly
+/// spaced nodes: (lower node, fraction towards the next).
+#[inline]
+pub fn node_position<const N: usize>(x: f32) -> (usize, f32) {
+    // max/min, not clamp: NaN becomes 0.
+    let f = x.max(0.0).min(1.0) * (N - 1) as f32;
+    // Through i32, which x86 converts in one instruction each way (usize takes a dozen).
+    // SAFETY: f is finite and in [0, N − 1], so the saturation `as` would add is not needed.
+    let i = unsafe { f.to_int_unchecked::<i32>() }.min(N as i32 - 2);
+    (i as usize, f - i as f32)
+}
+
 /// Luminance of a linear Rec.709 colour.
 #[inline]
 pub fn luminance(c: Rgb) -> f32 {

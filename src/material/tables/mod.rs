@@ -22,7 +22,7 @@ use rayon::prelude::*;
 
 use super::fresnel;
 use super::microfacet::Ggx;
-use crate::math::{Vec2, Vec3A};
+use crate::math::{Vec2, Vec3A, node_position};
 
 /// Nodes per axis of the E table (roughness × cos θo).
 pub const E_NODES: usize = 32;
@@ -174,21 +174,10 @@ pub fn compute(n: usize) -> (Vec<f32>, Vec<f32>, Vec<f32>) {
     (e, e_avg, s)
 }
 
-/// Linear interpolation weights of `x ∈ [0,1]` on `N` nodes: (lower node, fraction).
-#[inline]
-fn position<const N: usize>(x: f32) -> (usize, f32) {
-    // max/min, not clamp: NaN becomes 0.
-    let f = x.max(0.0).min(1.0) * (N - 1) as f32;
-    // Through i32, which x86 converts in one instruction each way (usize takes a dozen).
-    // SAFETY: f is finite and in [0, N − 1], so the saturation `as` would add is not needed.
-    let i = unsafe { f.to_int_unchecked::<i32>() }.min(N as i32 - 2);
-    (i as usize, f - i as f32)
-}
-
 /// Bilinear lookup in a table of `N × N` (x fastest).
 #[inline]
 fn lookup2<const N: usize>(table: &[f32], x: f32, y: f32) -> f32 {
-    bilinear::<N>(table, position::<N>(x), position::<N>(y))
+    bilinear::<N>(table, node_position::<N>(x), node_position::<N>(y))
 }
 
 /// The bilinear interpolation at a cell's corner (i, j) and fractions (fx, fy).
@@ -210,7 +199,7 @@ pub fn albedo(rough: f32, mu: f32) -> f32 {
 /// Ē(r), the cosine-weighted average of [`albedo`].
 #[inline]
 pub fn albedo_average(rough: f32) -> f32 {
-    let (i, f) = position::<E_NODES>(rough);
+    let (i, f) = node_position::<E_NODES>(rough);
     data::GGX_E_AVG[i] + (data::GGX_E_AVG[i + 1] - data::GGX_E_AVG[i]) * f
 }
 
@@ -219,7 +208,7 @@ pub fn albedo_average(rough: f32) -> f32 {
 #[inline]
 pub fn sheen(rough: f32, mu: f32) -> [f32; 3] {
     const N: usize = sheen::NODES;
-    let ((i, fx), (j, fy)) = (position::<N>(mu), position::<N>(rough));
+    let ((i, fx), (j, fy)) = (node_position::<N>(mu), node_position::<N>(rough));
     let at = |a: usize, b: usize| Vec3A::from(sheen::SHEEN[b * N + a]);
     let lo = at(i, j).lerp(at(i + 1, j), fx);
     let hi = at(i, j + 1).lerp(at(i + 1, j + 1), fx);
@@ -229,7 +218,7 @@ pub fn sheen(rough: f32, mu: f32) -> [f32; 3] {
 /// Trilinear lookup in a table of `N³` (x fastest).
 #[inline]
 fn lookup3<const N: usize>(table: &[f32], x: f32, y: f32, z: f32) -> f32 {
-    let (at_x, at_y, (k, fz)) = (position::<N>(x), position::<N>(y), position::<N>(z));
+    let (at_x, at_y, (k, fz)) = (node_position::<N>(x), node_position::<N>(y), node_position::<N>(z));
     let plane = |k: usize| bilinear::<N>(&table[k * N * N..], at_x, at_y);
     let (a, b) = (plane(k), plane(k + 1));
     a + (b - a) * fz
