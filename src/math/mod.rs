@@ -24,7 +24,8 @@ pub const LUMINANCE: Vec3A = Vec3A::new(0.2126, 0.7152, 0.0722);
 /// spaced nodes: (lower node, fraction towards the next).
 #[inline]
 pub fn node_position<const N: usize>(x: f32) -> (usize, f32) {
-    // max/min, not clamp: NaN becomes 0.
+    // max/min, not clamp, which keeps NaN: NaN becomes 0.
+    #[allow(clippy::manual_clamp)]
     let f = x.max(0.0).min(1.0) * (N - 1) as f32;
     // Through i32, which x86 converts in one instruction each way (usize takes a dozen).
     // SAFETY: f is finite and in [0, N − 1], so the saturation `as` would add is not needed.
