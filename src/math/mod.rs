@@ -114,6 +114,18 @@ mod tests {
     use super::*;
 
     #[test]
+    fn node_positions_clamp_and_take_nan_to_the_first_node() {
+        assert_eq!(node_position::<5>(0.5), (2, 0.0));
+        assert_eq!(node_position::<5>(0.3), (1, 0.3 * 4.0 - 1.0));
+        // The last node is reached as the end of the last cell.
+        assert_eq!(node_position::<5>(1.0), (3, 1.0));
+        for x in [-2.0, f32::NEG_INFINITY, f32::NAN] {
+            assert_eq!(node_position::<5>(x), (0, 0.0), "{x}");
+        }
+        assert_eq!(node_position::<256>(f32::INFINITY), (254, 1.0));
+    }
+
+    #[test]
     fn safe_acos_matches_libm_and_clamps() {
         for i in 0..=20_000 {
             let x = -1.0 + i as f32 / 10_000.0;
