@@ -3,7 +3,7 @@
 //! Owns: the ray–node test and the two traversal loops [`closest`] and [`any`] that
 //! [`super::accel`] runs over its BLASes and TLAS. The loops are obvhs's own (its exported
 //! `traverse!` macro, as `CwBvh::ray_traverse` and `ray_traverse_miss` use it); only the node
-//! test differs. obvhs tests a node's eight child boxes as two SSE halves, converting each
+//! test and the traversal state (whose stack is not zero-filled for every ray) differ. obvhs tests a node's eight child boxes as two SSE halves, converting each
 //! quantised plane byte to a float one at a time; with AVX2 (the x86-64-v3 build,
 //! `.cargo/config.toml`) [`node_hits`] widens each axis's eight plane bytes to floats in two
 //! instructions, tests all eight boxes at once, and places the hits with one vector shift. It
@@ -12,7 +12,11 @@
 //! one traced with obvhs's traversal (`node_test_matches_obvhs`). Builds without AVX2 use
 //! obvhs's test.
 
+use std::mem::MaybeUninit;
+
+use glam::UVec2;
 use obvhs::cwbvh::{CwBvh, node::CwBvhNode};
+use obvhs::faststack::FastStack;
 use obvhs::ray::Ray;
 
 /// The nearest box distance obvhs's node test accepts (its `node::EPSILON`, which it does not
@@ -119,6 +123,91 @@ macro_rules! take_group {
     }};
 }
 
+/// Entries of a traversal stack: obvhs's (a CWBVH deeper than this fails its validation).
+const STACK: usize = 32;
+
+/// obvhs's traversal state (`Traversal`, the fields its `traverse!` macro reads) with a stack
+/// that is not zero-filled: `CwBvh::new_traversal` writes all 256 bytes of its stack for
+/// every ray (and every instance a ray enters), which the traversal only reads back after
+/// pushing.
+struct State {
+    stack: Stack,
+    current_group: UVec2,
+    primitive_group: UVec2,
+    oct_inv4: u32,
+    primitive_id: u32,
+    hitmask: u32,
+}
+
+impl State {
+    /// The state at the start of a traversal of `bvh` in `direction`'s order.
+    #[inline(always)]
+    fn new(bvh: &CwBvh, direction: glam::Vec3A) -> Self {
+        // Its stack is dead here, and its zero-filling with it.
+        let start = bvh.new_traversal(direction);
+        Self {
+            stack: Stack::new(),
+            current_group: start.current_group,
+            primitive_group: start.primitive_group,
+            oct_inv4: start.oct_inv4,
+            primitive_id: 0,
+            hitmask: 0,
+        }
+    }
+}
+
+/// A stack of node groups whose entries are written only when pushed. Entry 0 is written at
+/// the start, so every entry a pop can read (the one below the top, or entry 0 when empty)
+/// holds a value; like obvhs's stack, a push onto a full one overwrites its top.
+struct Stack {
+    data: [MaybeUninit<UVec2>; STACK],
+    len: usize,
+}
+
+impl Stack {
+    #[inline(always)]
+    fn new() -> Self {
+        let mut data = [const { MaybeUninit::uninit() }; STACK];
+        data[0] = MaybeUninit::new(UVec2::ZERO);
+        Self { data, len: 0 }
+    }
+}
+
+impl FastStack<UVec2> for Stack {
+    #[inline(always)]
+    fn push(&mut self, v: UVec2) {
+        self.data[self.len] = MaybeUninit::new(v);
+        self.len = (self.len + 1).min(STACK - 1);
+    }
+
+    #[inline(always)]
+    fn pop_fast(&mut self) -> UVec2 {
+        self.len = self.len.saturating_sub(1);
+        // SAFETY: entries below every length the stack has had, and entry 0, were written.
+        unsafe { self.data[self.len].assume_init() }
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<UVec2> {
+        (self.len > 0).then(|| self.pop_fast())
+    }
+
+    #[inline(always)]
+    fn len(&self) -> usize {
+        self.len
+    }
+
+    #[inline(always)]
+    fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    #[inline(always)]
+    fn clear(&mut self) {
+        self.len = 0;
+    }
+}
+
 /// The closest primitive along `ray`: `test(ray, group)` tests a [`Group`] of primitives
 /// against `ray`, whose `tmax` has shrunk to the closest hit so far, and returns the slot and
 /// distance of its nearest hit closer than that, the highest slot winning a tie (as one
@@ -126,10 +215,9 @@ macro_rules! take_group {
 /// and distance of the closest hit.
 #[inline(always)]
 pub fn closest(bvh: &CwBvh, ray: Ray, mut test: impl FnMut(&Ray, Group) -> Option<(u32, f32)>) -> Option<(u32, f32)> {
-    use glam::UVec2;
     let mut ray = ray;
     let mut best = None;
-    let mut state = bvh.new_traversal(ray.direction);
+    let mut state = State::new(bvh, ray.direction);
     let mut node;
     obvhs::traverse!(bvh, node, state, node_hits(node, &ray, state.oct_inv4), {
         if let Some((slot, t)) = test(&ray, take_group!(state)) {
@@ -144,8 +232,7 @@ pub fn closest(bvh: &CwBvh, ray: Ray, mut test: impl FnMut(&Ray, Group) -> Optio
 /// group closer than `ray.tmax`; stops at the first.
 #[inline(always)]
 pub fn any(bvh: &CwBvh, ray: Ray, mut test: impl FnMut(&Ray, Group) -> bool) -> bool {
-    use glam::UVec2;
-    let mut state = bvh.new_traversal(ray.direction);
+    let mut state = State::new(bvh, ray.direction);
     let mut node;
     let mut found = false;
     'search: {
@@ -166,6 +253,23 @@ mod tests {
     use glam::Vec3A;
     use obvhs::{BvhBuildParams, cwbvh::builder::build_cwbvh_from_tris, triangle::Triangle};
     use std::time::Duration;
+
+    #[test]
+    fn the_stack_pops_what_was_pushed_and_overflows_as_obvhs_does() {
+        let mut s = Stack::new();
+        assert!(s.is_empty() && s.pop().is_none());
+        // Popped empty, as obvhs's stack: its first entry (written at the start).
+        assert_eq!(s.pop_fast(), UVec2::ZERO);
+        for i in 0..40 {
+            s.push(UVec2::new(i, 0));
+        }
+        // Full at 31: the pushes past it overwrote the top.
+        assert_eq!(s.len(), STACK - 1);
+        assert_eq!(s.pop_fast(), UVec2::new(30, 0));
+        assert_eq!(s.pop(), Some(UVec2::new(29, 0)));
+        s.clear();
+        assert!(s.is_empty());
+    }
 
     fn soup(n: usize) -> Vec<Triangle> {
         let mut u = numbers(7);
