@@ -3,13 +3,14 @@
 //! Owns: the ray–node test and the two traversal loops [`closest`] and [`any`] that
 //! [`super::accel`] runs over its BLASes and TLAS. The loops are obvhs's own (its exported
 //! `traverse!` macro, as `CwBvh::ray_traverse` and `ray_traverse_miss` use it); only the node
-//! test and the traversal state (whose stack is not zero-filled for every ray) differ. obvhs tests a node's eight child boxes as two SSE halves, converting each
-//! quantised plane byte to a float one at a time; with AVX2 (the x86-64-v3 build,
-//! `.cargo/config.toml`) [`node_hits`] widens each axis's eight plane bytes to floats in two
-//! instructions, tests all eight boxes at once, and places the hits with one vector shift. It
-//! does the same arithmetic in the same order as obvhs's test (multiply, then add; the same
-//! min/max operand order), so it visits the same nodes and every image is bit-identical to
-//! one traced with obvhs's traversal (`node_test_matches_obvhs`). Builds without AVX2 use
+//! test and the traversal state (whose stack is not zero-filled for every ray) differ. obvhs
+//! tests a node's eight child boxes as two SSE halves, converting each quantised plane byte
+//! to a float one at a time; with AVX2 (the x86-64-v3 build, `.cargo/config.toml`)
+//! [`node_hits`] widens each axis's eight plane bytes to floats in two instructions, tests
+//! all eight boxes at once, and places the hits with one vector shift. It does the same
+//! arithmetic in the same order as obvhs's test (multiply, then add; the same min/max
+//! operand order), so it visits the same nodes and every image is bit-identical to one
+//! traced with obvhs's traversal (`node_test_matches_obvhs`). Builds without AVX2 use
 //! obvhs's test.
 
 use std::mem::MaybeUninit;
