@@ -196,8 +196,9 @@ impl NodeSplit {
         let zero = f32x8::ZERO;
         let infinite = weights.cmp_eq(f32x8::splat(f32::INFINITY));
         if infinite.any() {
-            let each = f32x8::splat((SHARES / infinite.move_mask().count_ones() as f32).floor());
-            return (infinite.blend(each, zero).fast_trunc_int().to_array(), infinite.move_mask() as u32);
+            let mask = infinite.move_mask() as u32;
+            let each = f32x8::splat((SHARES / mask.count_ones() as f32).floor());
+            return (infinite.blend(each, zero).fast_trunc_int().to_array(), mask);
         }
         let positive = weights.cmp_gt(zero);
         let mut counted = positive.blend(weights, zero);
