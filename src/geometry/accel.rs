@@ -149,8 +149,9 @@ impl Blas {
         self.len() == 0
     }
 
-    /// Vertices of triangle `tri` (BVH order), in this BLAS's space.
-    #[inline]
+    /// Vertices of triangle `tri` (BVH order), in this BLAS's space. Always inlined, as
+    /// [`Accel::closest_hit`].
+    #[inline(always)]
     pub fn vertices(&self, tri: u32) -> [Vec3A; 3] {
         if self.corners.is_empty() {
             self.tris.vertices(tri)
@@ -176,7 +177,8 @@ impl Blas {
         b
     }
 
-    #[inline]
+    /// Always inlined, as [`Accel::closest_hit`].
+    #[inline(always)]
     fn closest(&self, ray: obvhs::ray::Ray, accept: &impl Fn(u32, f32, f32) -> bool) -> Option<(u32, f32, f32, f32)> {
         let bvh = self.bvh.as_ref()?;
         let mut bary = (0.0f32, 0.0f32);
@@ -357,8 +359,9 @@ impl Accel {
     }
 
     /// Closest intersection with `t ∈ (0, t_max)` that `accept(blas, tri, b1, b2)` keeps
-    /// (alpha cut-outs return false and the ray passes through).
-    #[inline]
+    /// (alpha cut-outs return false and the ray passes through). Always inlined: the path
+    /// loop's two copies (`integrator::path`) each take the whole query in.
+    #[inline(always)]
     pub fn closest_hit(&self, ray: &Ray, t_max: f32, accept: impl Fn(u32, u32, f32, f32) -> bool) -> Option<RawHit> {
         #[cfg(embree)]
         if let Some(e) = &self.embree {

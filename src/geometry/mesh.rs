@@ -278,8 +278,9 @@ impl Geometry {
     }
 
     /// Closest surface along `ray` with `t ∈ (0, t_max)`. `cut_out(material, uv)` is asked
-    /// about hits on alpha-masked triangles; true lets the ray pass.
-    #[inline]
+    /// about hits on alpha-masked triangles; true lets the ray pass. Always inlined, as
+    /// `Accel::closest_hit`.
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray, t_max: f32, cut_out: impl Fn(u32, Vec2) -> bool) -> Option<SurfaceHit> {
         let raw = if self.masked {
             self.accel.closest_hit(ray, t_max, |blas, tri, b1, b2| {

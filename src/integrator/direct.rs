@@ -38,8 +38,9 @@ fn light_numbers(scene: &Scene, id: u32, stream: &SampleStream, bounce: u32, sub
 /// surface or a point or directional light, the light that reaches the point through it
 /// ([`mnee`], as `glass` allows), with the two numbers `u` ([`light_numbers`]).
 /// `observe(c, visible)` hears of each shadow ray: the luminance of the unshadowed,
-/// unweighted contribution and whether it got through.
-#[inline]
+/// unweighted contribution and whether it got through. Always inlined, as
+/// [`estimate_direct`].
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn light_contribution(
     scene: &Scene,
@@ -130,8 +131,9 @@ fn light_contribution(
 /// estimated with `strategy` and weighed
 /// against the density `scattering` samples directions with, and for point and spot lights
 /// against light paths where they sample the same path (`highlight`); also through smooth
-/// glass, as `glass` allows.
-#[inline]
+/// glass, as `glass` allows. Always inlined into the path loop's two copies
+/// (`path::Tracer::trace`).
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_direct(
     scene: &Scene,
@@ -148,16 +150,15 @@ pub fn estimate_direct(
     let (sp, p) = (&scattering.sp, ctx.p);
     let diffuse = sp.is_diffuse();
     match strategy.sampler().filter(|_| !strategy.takes_every_light(diffuse)) {
-        None => scene
-            .lights
-            .iter()
-            .enumerate()
-            .map(|(i, _)| {
-                let u = light_numbers(scene, i as u32, stream, bounce, i as u32);
+        None => {
+            let mut sum = Rgb::ZERO;
+            for i in 0..scene.lights.len() as u32 {
+                let u = light_numbers(scene, i, stream, bounce, i);
                 let rays = &mut tally.rays;
-                light_contribution(scene, i as u32, 1.0, scattering, p, medium, glass, highlight, u, rays, |_, _| {})
-            })
-            .fold(Rgb::ZERO, |a, b| a + b),
+                sum += light_contribution(scene, i, 1.0, scattering, p, medium, glass, highlight, u, rays, |_, _| {});
+            }
+            sum
+        }
         Some(sampler) => {
             let u_select = stream.get_1d_u64(bounce, Dim::LightSelect, 0);
             let rays = &mut tally.rays;

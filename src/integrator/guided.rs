@@ -66,13 +66,18 @@ impl<'a> Scattering<'a> {
         }
     }
 
+    /// The BSDF's own sample with the numbers of `bounce` (what [`sample`](Self::sample) draws
+    /// where nothing guides). Always inlined, with what it calls, into the path loop.
+    #[inline(always)]
+    pub fn bsdf_sample(&self, stream: &SampleStream, bounce: u32) -> Option<BsdfSample> {
+        let u_lobe = if self.sp.chooses_lobes() { stream.get_1d(bounce, Dim::BsdfLobe, 0) } else { 0.0 };
+        self.sp.sample(u_lobe, stream.get_2d(bounce, Dim::BsdfDirection, 0))
+    }
+
     /// Samples a world direction with the numbers of `bounce`.
     #[inline]
     pub fn sample(&self, stream: &SampleStream, bounce: u32) -> Option<BsdfSample> {
-        let from_bsdf = || {
-            let u_lobe = if self.sp.chooses_lobes() { stream.get_1d(bounce, Dim::BsdfLobe, 0) } else { 0.0 };
-            self.sp.sample(u_lobe, stream.get_2d(bounce, Dim::BsdfDirection, 0))
-        };
+        let from_bsdf = || self.bsdf_sample(stream, bounce);
         let Some((d, alpha)) = self.guide else { return from_bsdf() };
         if stream.get_1d(bounce, Dim::GuideChoice, 0) < alpha {
             let (wi, p_guide) = d.sample(stream.get_2d(bounce, Dim::GuideDirection, 0));

@@ -453,8 +453,9 @@ impl Material {
     /// object, for glass) or its back, or `None` when the surface reflects nothing (a black
     /// emitter). With `as_smooth`, smooth glass ([`Material::smooth_glass`]) scatters as if
     /// its roughness were 0: what a path that next-event estimation through glass also
-    /// follows must meet (`integrator::mnee`).
-    #[inline]
+    /// follows must meet (`integrator::mnee`). Always inlined into the path loop's two copies
+    /// (`integrator::path`), where it is set up at every vertex.
+    #[inline(always)]
     pub fn bsdf(&self, uv: Vec2, images: &[Image], entering: bool, as_smooth: bool) -> Option<Bsdf> {
         let base = self.base_color_at(uv, images);
         let (mut metallic, mut roughness) = (self.metallic, if as_smooth { 0.0 } else { self.roughness });
@@ -613,8 +614,8 @@ impl ShadingPoint {
         Some(GlossyLobes::new(mirror, diffuse, glossy))
     }
 
-    /// Samples a world direction.
-    #[inline]
+    /// Samples a world direction (always inlined into the path loop).
+    #[inline(always)]
     pub fn sample(&self, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         let s = self.bsdf.sample(u_lobe, u)?;
         let wi = self.frame.to_world(s.wi);

@@ -527,8 +527,9 @@ impl PrincipledAt {
         m.eval_pdf_view::<false, true>(&self.view, wo, wi).1
     }
 
-    /// Picks the glossy or the diffuse lobe with `u_lobe`, then a direction with `u`.
-    #[inline]
+    /// Picks the glossy or the diffuse lobe with `u_lobe`, then a direction with `u` (always
+    /// inlined into the path loop).
+    #[inline(always)]
     pub fn sample(&self, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         let (m, wo, v) = (&self.model, self.wo, &self.view);
         if wo.z <= 0.0 {
