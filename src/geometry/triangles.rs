@@ -99,7 +99,9 @@ impl Triangles {
     #[inline(always)]
     pub fn vertices(&self, slot: u32) -> [Vec3A; 3] {
         let i = Self::at(slot as usize);
-        let c = |k: usize| self.planes[i + k * STORED];
+        // One bounds check for the nine planes, not one each.
+        let planes = &self.planes[i..=i + 8 * STORED];
+        let c = |k: usize| planes[k * STORED];
         [Vec3A::new(c(0), c(1), c(2)), Vec3A::new(c(3), c(4), c(5)), Vec3A::new(c(6), c(7), c(8))]
     }
 
