@@ -293,10 +293,10 @@ impl Tracer<'_> {
 
     /// The path loop. `PLAIN`: the render uses none of guiding, light through glass and
     /// clamping, so the loop takes them as constants and their checks at every vertex, and
-    /// the state they carry, compile away (2.0–4.5 % of a sample's instructions with
-    /// what they call inlined; the performance page). Both copies are the same code: a plain render's image is the same
-    /// from either. What the loop calls at every vertex is `#[inline(always)]`, as LLVM would
-    /// leave it out of line once two copies of the loop call it.
+    /// the state they carry, compile away (2.0–4.5 % of a sample's instructions with what
+    /// they call inlined; the performance page). Both copies are the same code: a plain
+    /// render's image is the same from either. What the loop calls at every vertex is
+    /// `#[inline(always)]`, as LLVM would leave it out of line once two copies call it.
     fn trace<const PLAIN: bool>(&self, mut ray: Ray, stream: &SampleStream, tally: &mut Tally) -> PathSample {
         let Tracer { scene, strategy, guide, max_depth, clamp, caustics, light_paths, first_hits } = *self;
         let (guide, caustics, clamp) = if PLAIN { (None, false, Clamp::OFF) } else { (guide, caustics, clamp) };
