@@ -285,9 +285,9 @@ impl Tracer<'_> {
     pub fn radiance(&self, ray: Ray, stream: &SampleStream, tally: &mut Tally) -> PathSample {
         let learning = tally.seen.guide_records().is_some();
         if self.guide.is_none() && !learning && !self.caustics && !self.clamp.is_on() {
-            self.trace::<true>(ray, stream, tally)
+            self.trace::<true>(ray, stream, tally, false)
         } else {
-            self.trace::<false>(ray, stream, tally)
+            self.trace::<false>(ray, stream, tally, learning)
         }
     }
 
@@ -297,7 +297,14 @@ impl Tracer<'_> {
     /// they call inlined; the performance page). Both copies are the same code: a plain
     /// render's image is the same from either. What the loop calls at every vertex is
     /// `#[inline(always)]`, as LLVM would leave it out of line once two copies call it.
-    fn trace<const PLAIN: bool>(&self, mut ray: Ray, stream: &SampleStream, tally: &mut Tally) -> PathSample {
+    /// `recording`: path guiding learns from this path's vertices (`tally.trail`).
+    fn trace<const PLAIN: bool>(
+        &self,
+        mut ray: Ray,
+        stream: &SampleStream,
+        tally: &mut Tally,
+        recording: bool,
+    ) -> PathSample {
         let Tracer { scene, strategy, guide, max_depth, clamp, caustics, light_paths, first_hits } = *self;
         let (guide, caustics, clamp) = if PLAIN { (None, false, Clamp::OFF) } else { (guide, caustics, clamp) };
         let mut l = Rgb::ZERO;
@@ -312,8 +319,6 @@ impl Tracer<'_> {
         // The camera hit where light paths may reach it (point, geometric normal), projected
         // into the image only where the path meets a glossy surface next.
         let mut first: Option<(Vec3A, Vec3A)> = None;
-        // Whether path guiding learns from this path's vertices (`tally.trail`).
-        let recording = !PLAIN && tally.seen.guide_records().is_some();
         let mut depth = 0u32;
         loop {
             let counters = &mut tally.rays;
