@@ -207,8 +207,9 @@ impl NodeSplit {
         }
     }
 
-    /// [`scaled_running_sums`](Self::scaled_running_sums) one weight after another.
-    #[cfg_attr(all(target_arch = "x86_64", target_feature = "avx2"), allow(dead_code))]
+    /// [`scaled_running_sums`](Self::scaled_running_sums) one weight after another (builds
+    /// without AVX2, and the test of the AVX2 form).
+    #[cfg(any(test, not(all(target_arch = "x86_64", target_feature = "avx2"))))]
     fn scaled_running_sums_scalar(shares: &[i32; 8], per_share: u64) -> [u64; 8] {
         let mut acc = 0u64;
         shares.map(|q| {
