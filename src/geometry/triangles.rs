@@ -151,12 +151,14 @@ impl Triangles {
         {
             debug_assert!((group.base as usize) < self.len);
             let planes = Self::at(group.base as usize);
-            // Eight slots a register, the highest eight first.
-            for chunk in (0..3).rev() {
+            // Eight slots a register, the highest eight first, only those holding some.
+            let mut chunks = (group.mask & 0xff != 0) as u32
+                | ((group.mask & 0xff00 != 0) as u32) << 1
+                | ((group.mask & 0xff_0000 != 0) as u32) << 2;
+            while chunks != 0 {
+                let chunk = 31 - chunks.leading_zeros();
+                chunks &= !(1 << chunk);
                 let lanes = (group.mask >> (8 * chunk)) & 0xff;
-                if lanes == 0 {
-                    continue;
-                }
                 let first = group.base + 8 * chunk;
                 // SAFETY: AVX2 is compiled in (and checked at start-up, `crate::cpu`); the
                 // group's base is a real triangle, whose chunk stores 24 slots from it.
