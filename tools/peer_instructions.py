@@ -21,7 +21,6 @@ peers' venv (`tools/peers/setup_venv.sh`).
 """
 
 import argparse
-import re
 import shlex
 import subprocess
 import sys
@@ -30,11 +29,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tools"))
-from per_sample import instructions  # noqa: E402
+from per_sample import counted, instructions  # noqa: E402
 
 MITSUBA = ROOT / "tools/peers/mitsuba_render.py"
-CACHEGRIND = ["valgrind", "--tool=cachegrind", "--cache-sim=no", "--smc-check=all-non-file",
-              "--cachegrind-out-file=/dev/null"]
 
 
 def mitsuba_instructions(python, scene, spp, size, bounces, lambert, out):
@@ -44,8 +41,8 @@ def mitsuba_instructions(python, scene, spp, size, bounces, lambert, out):
            "--spp", str(spp), "--threads", "1", f"--max-bounces={bounces}", "--no-warm",
            "--light-weights", "power"] + (["--lambert"] if lambert else [])
     subprocess.run(cmd, check=True, capture_output=True)
-    err = subprocess.run(CACHEGRIND + cmd, check=True, capture_output=True, text=True).stderr
-    return int(re.search(r"I\s+refs:\s+([\d,]+)", err).group(1).replace(",", ""))
+    # Code LLVM writes at run time is translated anew wherever it is rewritten.
+    return counted(cmd, valgrind=["--smc-check=all-non-file"])[0]
 
 
 def main():

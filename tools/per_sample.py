@@ -37,19 +37,24 @@ ROOT = Path(__file__).resolve().parent.parent
 CACHES = ["--cache-sim=yes", "--D1=32768,8,64", "--LL=524288,8,64"]
 
 
-def costs(myriad, scene, sampler, spp, resolution, flags, misses=False):
-    """Instructions of a one-thread render (and, with `misses`, its data misses in the first
-    level and in the L2-sized last level): a tuple."""
+def counted(cmd, misses=False, valgrind=()):
+    """Instructions of running `cmd` under cachegrind (and, with `misses`, its data misses in
+    the first level and in the L2-sized last level): a tuple. `valgrind`: more of its options."""
     sim = CACHES if misses else ["--cache-sim=no"]
-    cmd = ["valgrind", "--tool=cachegrind", *sim, "--cachegrind-out-file=/dev/null", myriad,
-           "render", scene, "--spp", str(spp), "--resolution", resolution, "--threads", "1",
-           "--sampler", sampler, "-o", str(Path(tempfile.gettempdir()) / "per-sample.exr"), "-q", *flags]
-    err = subprocess.run(cmd, capture_output=True, text=True, check=True).stderr
+    run = ["valgrind", "--tool=cachegrind", *sim, *valgrind, "--cachegrind-out-file=/dev/null", *cmd]
+    err = subprocess.run(run, capture_output=True, text=True, check=True).stderr
     keys = [r"I\s+refs", r"D1\s+misses", r"LLd\s+misses"] if misses else [r"I\s+refs"]
     found = [re.search(k + r":\s+([\d,]+)", err) for k in keys]
     if not all(found):
         sys.exit(f"no counts in valgrind's output:\n{err}")
     return tuple(int(m.group(1).replace(",", "")) for m in found)
+
+
+def costs(myriad, scene, sampler, spp, resolution, flags, misses=False):
+    """`counted` for a one-thread myriad render of `spp` samples per pixel."""
+    return counted([myriad, "render", scene, "--spp", str(spp), "--resolution", resolution, "--threads", "1",
+                    "--sampler", sampler, "-o", str(Path(tempfile.gettempdir()) / "per-sample.exr"), "-q", *flags],
+                   misses)
 
 
 def instructions(myriad, scene, sampler, spp, resolution, flags):
