@@ -7,6 +7,9 @@
 //! illegal instructions on an older CPU, so [`require_build_features`] tells the user which
 //! extensions are missing and how to rebuild, instead of letting the process die on SIGILL.
 //!
+//! Also the one home of the cache-prefetch hint ([`prefetch`]) the samplers give ahead of
+//! loads that would otherwise wait on each other.
+//!
 //! It must run before any code that the compiler may have vectorised with those extensions:
 //! it reads CPUID and XCR0 itself, walks a `static` table and writes fixed byte strings, so
 //! that it passes through no 16- or 32-byte copies the compiler could encode with AVX.
@@ -147,9 +150,42 @@ pub fn require_build_features() {
     }
 }
 
+/// Asks the CPU to bring the cache lines `data` spans (at most `most` of them, from its start)
+/// into its caches ahead of their use: a hint, with no effect on any result, and none at all
+/// on targets without the instruction.
+#[inline(always)]
+pub fn prefetch<T: ?Sized>(data: &T, most: usize) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let p = (data as *const T).cast::<i8>();
+        let lines = (p as usize % 64 + std::mem::size_of_val(data)).div_ceil(64).min(most);
+        for line in 0..lines {
+            // SAFETY: a prefetch has no architectural effect and never faults; `wrapping_add`
+            // stays within the last line `data` touches.
+            unsafe {
+                use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+                _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(64 * line));
+            }
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (data, most);
+}
+
 #[cfg(all(test, target_arch = "x86_64"))]
 mod tests {
     use super::*;
+
+    #[test]
+    fn prefetching_any_span_is_only_a_hint() {
+        let data = [7u16; 700];
+        for (start, len) in [(0, 0), (1, 1), (3, 32), (0, 700), (33, 600)] {
+            prefetch(&data[start..start + len], usize::MAX);
+            prefetch(&data[start..start + len], 2);
+        }
+        prefetch(&0u8, 1);
+        assert!(data.iter().all(|&v| v == 7));
+    }
 
     #[test]
     fn this_machine_offers_what_the_tests_were_built_for() {

@@ -138,17 +138,8 @@ impl LightSampler for AnyLightSampler {
 /// its use: a hint, with no effect on results.
 #[inline(always)]
 pub fn prefetch<T>(items: &[T], index: usize) {
-    #[cfg(target_arch = "x86_64")]
     if let Some(item) = items.get(index) {
-        let p = (item as *const T).cast::<i8>();
-        for line in 0..std::mem::size_of::<T>().div_ceil(64).min(4) {
-            // SAFETY: prefetching has no architectural effect; the addresses lie inside a
-            // live item (`wrapping_add` never leaves it by more than a line).
-            unsafe {
-                use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-                _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(64 * line));
-            }
-        }
+        crate::cpu::prefetch(item, 4);
     }
 }
 

@@ -407,6 +407,8 @@ impl Table16 {
     const FLAT: usize = 64;
     /// Bits a selection number is shifted by: its top 16 choose.
     const SHIFT: u32 = 48;
+    /// Most bytes of a table prefetched whole when it is sampled.
+    const PREFETCHED: usize = 2048;
 
     /// The table of `weights`; `None` unless there are 1 to [`Table16::MAX`] of them, all
     /// positive and finite.
@@ -464,6 +466,13 @@ impl Table16 {
     #[inline]
     pub fn sample(&self, u: u64) -> (usize, f32) {
         let v = (u >> Self::SHIFT) as u16;
+        // Which block is read after the summary is known only from the summary: a table
+        // with one, of up to `PREFETCHED` bytes, is asked for whole first, so that reading
+        // its block does not wait on memory a second time (`cells`' tables over clusters;
+        // docs/performance.md).
+        if self.summary > 0 && self.values.len() * size_of::<u16>() <= Self::PREFETCHED {
+            crate::cpu::prefetch(&*self.values, usize::MAX);
+        }
         let (summary, lasts) = self.values.split_at(self.summary as usize);
         let index = if summary.is_empty() {
             Self::below(lasts, v)
