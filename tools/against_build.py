@@ -29,8 +29,6 @@ Only the Python standard library, git, cargo and valgrind are used.
 """
 
 import argparse
-import os
-import re
 import shlex
 import statistics
 import subprocess
@@ -40,7 +38,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tools"))
-from per_sample import instructions  # noqa: E402
+from peer_table import cpu_of, rel_mse  # noqa: E402
+from per_sample import sample_costs  # noqa: E402
 
 #: Above this relMSE between the two builds' renders they are not the same image.
 SAME = 1e-9
@@ -68,30 +67,6 @@ def render(myriad, scene, out, sampler, flags, spp, resolution, threads):
     """The command rendering `scene` once, quietly, into `out`."""
     return [myriad, "--threads", str(threads), "render", scene, "--spp", str(spp), "--resolution", resolution,
             "--seed", "1", "--sampler", sampler, "-o", out, "-q", *flags]
-
-
-def rel_mse(myriad, a, b):
-    """relMSE of EXR `a` against EXR `b`, by `myriad diff`."""
-    text = subprocess.run([myriad, "diff", a, b], capture_output=True, text=True, check=True).stdout
-    found = re.search(r"^relMSE\s+(\S+)", text, re.M)
-    if not found:
-        sys.exit(f"no relMSE in myriad diff's output:\n{text}")
-    return float(found.group(1))
-
-
-def cpu_seconds(cmd):
-    """User + system seconds of running `cmd` to its end."""
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    _, status, usage = os.wait4(proc.pid, 0)
-    if status != 0:
-        sys.exit(f"{shlex.join(cmd)} failed ({status})")
-    return usage.ru_utime + usage.ru_stime
-
-
-def per_sample(myriad, scene, sampler, flags):
-    """Instructions a sample of a one-thread render at 80 × 60 (12 − 4 spp)."""
-    return (instructions(myriad, scene, sampler, 12, "80x60", flags)
-            - instructions(myriad, scene, sampler, 4, "80x60", flags)) / (8 * 80 * 60)
 
 
 def main():
@@ -126,7 +101,7 @@ def main():
                                capture_output=True)
             diff = rel_mse(new, b, a)
             mark = "" if diff <= SAME else " (not the same image)"
-            i_old, i_new = (per_sample(m, scene, args.sampler, flags[m]) for m in (old, new))
+            i_old, i_new = (sample_costs(m, scene, args.sampler, "80x60", flags[m])[0] for m in (old, new))
             timed = "| – | –"
             if not args.no_time:
                 times = {old: [], new: []}
@@ -135,7 +110,7 @@ def main():
                         out = str(Path(tmp) / "timed.exr")
                         cmd = render(myriad, scene, out, args.sampler, flags[myriad], args.spp, args.resolution,
                                      args.threads)
-                        times[myriad].append(cpu_seconds(cmd))
+                        times[myriad].append(cpu_of(cmd))
                 ratios = sorted(o / n for o, n in zip(times[old], times[new]))
                 timed = (f"| {statistics.median(times[old]):.2f} / {statistics.median(times[new]):.2f} "
                          f"| {statistics.median(ratios):.3f}× ({ratios[0]:.3f}–{ratios[-1]:.3f})")

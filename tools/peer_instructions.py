@@ -29,7 +29,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tools"))
-from per_sample import counted, instructions  # noqa: E402
+from per_sample import counted, sample_costs  # noqa: E402
 
 MITSUBA = ROOT / "tools/peers/mitsuba_render.py"
 
@@ -63,8 +63,8 @@ def main():
     rows = []
     if args.max_bounces >= 0:
         flags = ["--max-depth", str(args.max_bounces + 1)] + shlex.split(args.flags)
-        counts = [instructions(args.myriad, args.scene, args.sampler, spp, args.resolution, flags) for spp in (low, high)]
-        rows.append((f"myriad ({args.sampler} {' '.join(flags)})", (counts[1] - counts[0]) / samples))
+        per_sample = sample_costs(args.myriad, args.scene, args.sampler, args.resolution, flags, spp=(low, high))[0]
+        rows.append((f"myriad ({args.sampler} {' '.join(flags)})", per_sample))
     if Path(args.peers_python).exists():
         with tempfile.TemporaryDirectory() as tmp:
             out = str(Path(tmp) / "mitsuba.exr")

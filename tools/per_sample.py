@@ -57,9 +57,12 @@ def costs(myriad, scene, sampler, spp, resolution, flags, misses=False):
                    misses)
 
 
-def instructions(myriad, scene, sampler, spp, resolution, flags):
-    """Instructions of a one-thread render of `spp` samples per pixel."""
-    return costs(myriad, scene, sampler, spp, resolution, flags)[0]
+def sample_costs(myriad, scene, sampler, resolution, flags, misses=False, spp=(4, 12)):
+    """What one sample costs (`costs`' tuple): the difference of renders at the two sample
+    counts `spp` over the samples between, so that loading, building and writing cancel out."""
+    w, h = (int(x) for x in resolution.split("x"))
+    low, high = (costs(myriad, scene, sampler, n, resolution, flags, misses) for n in spp)
+    return tuple((b - a) / (w * h * (spp[1] - spp[0])) for a, b in zip(low, high))
 
 
 def main():
@@ -78,7 +81,6 @@ def main():
     flags = shlex.split(args.flags)
     if not Path(args.myriad).exists():
         sys.exit(f"{args.myriad} is missing: cargo build --release")
-    w, h = (int(x) for x in args.resolution.split("x"))
     with tempfile.TemporaryDirectory() as out:
         subprocess.run([args.myriad, "compare", args.scene, "--samplers", args.samplers, "--spp", str(args.spp),
                         "--seeds", str(args.seeds), "--resolution", args.resolution, "--reference", args.reference,
@@ -91,9 +93,7 @@ def main():
     rows = []
     for s in report["samplers"]:
         errors = sorted(r["rel_mse"] * args.spp for r in s["runs"])
-        a = costs(args.myriad, args.scene, s["sampler"], 4, args.resolution, flags, args.misses)
-        b = costs(args.myriad, args.scene, s["sampler"], 12, args.resolution, flags, args.misses)
-        per_sample = [(y - x) / (w * h * 8) for x, y in zip(a, b)]
+        per_sample = sample_costs(args.myriad, args.scene, s["sampler"], args.resolution, flags, args.misses)
         trimmed = s["rel_mse_trimmed"]["mean"] * args.spp
         rows.append((s["sampler"], s["rel_mse"]["mean"] * args.spp, errors, per_sample, trimmed))
     best = min(e * c[0] for _, e, _, c, _ in rows)
