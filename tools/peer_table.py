@@ -7,10 +7,12 @@
 
 For each scene `tests/data/blender/NAME.glb` it renders, at 320×240 and `--spp` samples with
 8 bounces (myriad: 9 scattering events), every seed of `--seeds`:
-  * myriad with `cells` (the default), `tree`, `uniform` and `power`;
+  * myriad with `cells` (the default), `tree`, `uniform` and `power`, and `power` without
+    light paths (`--caustics off`: chosen and traced as Mitsuba's power run, like for like);
   * Cycles 5.0 with its light tree on and off (`cycles_render.py`, Blender's own importer);
   * Mitsuba 3 with uniform and power light weights (`mitsuba_render.py`, llvm_ad_rgb when a
-    libLLVM ≥ 17 is installed: `apt-get install libllvm19`; scalar_rgb otherwise).
+    libLLVM ≥ 17 is installed: `apt-get install libllvm19`; scalar_rgb otherwise), and with
+    power light weights in scalar_rgb, one path at a time.
 and measures each image against Cycles' 1024-spp render `tests/data/blender/refs/NAME.cycles.exr`
 with `myriad diff` (relMSE = mean((x − ref)² / (ref² + 0.01))). CPU seconds: myriad's whole
 process (start-up, load and build included); the peers' render only (`cpu_render_s` of their
@@ -59,17 +61,27 @@ def rel_mse(myriad, image, reference):
     return float(re.search(r"relMSE\s+(\S+)", out).group(1))
 
 
+#: myriad's rows: (label, file tag, options). The last one chooses lights as Mitsuba's power
+#: run does and traces no light paths (Mitsuba has none): a sample's cost like for like.
+MYRIAD_RUNS = [
+    ("myriad `cells` (default)", "cells", ["--sampler", "cells"]),
+    ("myriad `tree`", "tree", ["--sampler", "tree"]),
+    ("myriad `uniform`", "uniform", ["--sampler", "uniform"]),
+    ("myriad `power`", "power", ["--sampler", "power"]),
+    ("myriad `power`, no light paths", "power_plain", ["--sampler", "power", "--caustics", "off"]),
+]
+
+
 def myriad_rows(myriad, glb, ref, out, spp, seeds):
     rows = []
-    for sampler in ["cells", "tree", "uniform", "power"]:
+    for label, tag, flags in MYRIAD_RUNS:
         runs = []
         for seed in seeds:
-            exr = out / f"myriad_{sampler}_{seed}.exr"
+            exr = out / f"myriad_{tag}_{seed}.exr"
             cmd = [myriad, "render", glb, "--resolution", f"{RES[0]}x{RES[1]}", "--spp", spp, "--max-depth",
-                   BOUNCES + 1, "--sampler", sampler, "--seed", seed, "-q", "-o", exr, "--no-png"]
+                   BOUNCES + 1, *flags, "--seed", seed, "-q", "-o", exr, "--no-png"]
             cpu = cpu_of(cmd)
             runs.append((rel_mse(myriad, exr, ref), cpu))
-        label = f"myriad `{sampler}`" + (" (default)" if sampler == "cells" else "")
         rows.append((label, runs))
     return rows
 
@@ -84,6 +96,8 @@ def peer_rows(args, myriad, glb, ref, out):
         ("Cycles 5.0, tree off", "cycles_render.py", ["--light-tree", "off"]),
         ("Mitsuba 3, uniform", "mitsuba_render.py", ["--light-weights", "uniform"]),
         ("Mitsuba 3, power", "mitsuba_render.py", ["--light-weights", "power"]),
+        # Mitsuba one path at a time: what its eight-lane LLVM build gains by its wavefront.
+        ("Mitsuba 3, power, one path at a time", "mitsuba_render.py", ["--light-weights", "power", "--variant", "scalar_rgb"]),
     ]
     for label, script, extra in peers:
         runs = []
